@@ -1,0 +1,79 @@
+# SPDX-License-Identifier: Apache-2.0
+# urtwin — thin wrapper over CMake. Every target installs what is missing first (deps).
+#   make run    build and start the emulator with config/ur5.yaml (the physics runner for now)
+#   make test   every test: CMocka under ctest (twice: release and ASan/UBSan), then pytest
+#   make bench  urt_step against MuJoCo mj_step and Pinocchio ABA, writes build/bench.json
+
+SHELL := /bin/bash
+JOBS ?= $(shell nproc)
+VENV := .venv
+PY := $(VENV)/bin/python
+APT_PACKAGES := build-essential cmake pkg-config libeigen3-dev libsundials-dev libcmocka-dev \
+  libyaml-cpp-dev liblcm-dev liblcm-bin cyclonedds-dev cyclonedds-tools libcli11-dev \
+  python3 python3-venv python3-pip clang libclang-rt-14-dev
+
+.PHONY: all deps apt venv build build-asan test test-unit test-asan test-python bench run clean \
+  reference-compare plots
+
+all: build
+
+# ---- dependencies ----------------------------------------------------------------------
+deps: apt venv
+
+apt:
+	@missing=""; for p in $(APT_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" != 0 ]; then echo "missing Debian packages:$$missing (run as root or install them)"; exit 1; fi; \
+	  echo "installing:$$missing"; \
+	  apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q $$missing; \
+	fi
+
+venv: $(VENV)/.stamp
+
+$(VENV)/.stamp: tools/requirements.txt
+	python3 -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -r tools/requirements.txt
+	touch $@
+
+# ---- build -----------------------------------------------------------------------------
+build: deps
+	cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DURT_PYTHON=$(abspath $(PY)) >/dev/null
+	cmake --build build -j $(JOBS)
+
+build-asan: deps
+	cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DURT_SANITIZE=ON -DURT_BUILD_TOOLS=OFF >/dev/null
+	cmake --build build-asan -j $(JOBS)
+
+# ---- tests -----------------------------------------------------------------------------
+test: test-unit test-asan test-python
+
+test-unit: build
+	ctest --test-dir build --output-on-failure -j $(JOBS)
+
+test-asan: build-asan
+	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --test-dir build-asan --output-on-failure -j $(JOBS)
+
+test-python: build
+	URT_BUILD=$(abspath build) $(PY) -m pytest -q tests/python
+
+# ---- benchmarks and tools --------------------------------------------------------------
+bench: build
+	URT_BUILD=$(abspath build) $(PY) tools/bench.py --out build/bench.json
+
+# the full 10 s excitation comparison against CVODE (slow: minutes)
+reference-compare: build
+	build/tools/urt_sim --traj excitation --duration 10 --compare --out build/compare
+
+plots: build
+	build/tools/urt_sim --traj excitation --duration 10 --out build/excitation.csv
+	$(PY) tools/plot_run.py build/excitation.csv --out build/plots
+
+run: build
+	build/tools/urt_sim --config config/ur5.yaml --traj pickplace --realtime
+
+clean:
+	rm -rf build build-asan

@@ -1,0 +1,116 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * core/include/urt/core.h — the public API of the physics core.
+ *
+ *   config/ur5.yaml ──urt_model_load()──▶ const urt_model_t ──urt_data_init()──▶ urt_data_t
+ *   urt_command_set(m, d, cmd)  then  urt_step(m, d)  advances exactly m->dt.
+ */
+#ifndef URT_CORE_H
+#define URT_CORE_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#include "urt/data.h"
+#include "urt/errors.h"
+#include "urt/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+//---- model ----
+
+/* Load and validate a robot parameter file, then prepare it (derived values, integrator
+ * tables). overrides: NULL or a NULL-terminated list of "key.path=value" strings applied to
+ * the YAML tree before validation (e.g. "sensors.noise=false", "simulation.dt=1e-4").
+ * Context: non-RT (reads files, allocates).
+ * Returns 0, or URT_ECONFIG / URT_EIO / URT_ENOMEM. On failure *out is untouched and err (if
+ * not NULL) receives "file:line: key: reason" (at most err_sz bytes). Nullable: overrides, err. */
+int urt_model_load(const char *path, const char *const *overrides, urt_model_t **out, char *err,
+                   size_t err_sz);
+
+/* Compute derived parameters and integrator tables of a filled-in model (the loader calls this).
+ * Context: non-RT (allocates m->tables). Returns 0 or URT_ENOMEM / URT_ESOLVER. */
+int urt_model_prepare(urt_model_t *m);
+
+/* Free a model from urt_model_load (or prepared by urt_model_prepare). Nullable: m. */
+void urt_model_free(urt_model_t *m);
+
+/* Write the fully resolved model (every parameter, derived ones marked) as YAML or JSON.
+ * Context: non-RT. json: 0 YAML, 1 JSON. */
+void urt_model_print(const urt_model_t *m, FILE *f, int json);
+
+//---- data ----
+
+/* Initialise caller-owned data at rest at m->q0 (or at q when q is not NULL) with the
+ * transient-free equilibrium of eq. (6) under gravity (model.md §1.5): set-point = q,
+ * every filter at its measured value, z = 0. Context: any; no allocation. Nullable: q.
+ * Returns 0 or URT_ESOLVER. */
+int urt_data_init(const urt_model_t *m, urt_data_t *d, const double *q);
+
+/* Validate and install a joint command. A command with NaN/Inf, positions outside the joint
+ * limits, speeds above qd_max, accelerations above qdd_max or torques above torque_max is
+ * refused: the previous set-point is held (frozen at the current measured position, zero
+ * speed) and d->pstop gets the cause. Context: RT. Returns 0 or URT_EPSTOP. */
+int urt_command_set(const urt_model_t *m, urt_data_t *d, const urt_command_t *cmd);
+
+/* Clear the protective stop; the set-point becomes the current joint position at rest.
+ * Context: RT. */
+void urt_pstop_reset(const urt_model_t *m, urt_data_t *d);
+
+//---- step ----
+
+/* Advance the simulation by exactly m->dt with the fixed-step ROS2 scheme (model.md §5.3).
+ * Context: RT — no allocation, no locks, no system calls, no printing.
+ * Returns 0, or URT_ESOLVER if the state became non-finite (the step is undone and
+ * URT_PSTOP_NONFINITE_STATE set). */
+int urt_step(const urt_model_t *m, urt_data_t *d);
+
+/* Right-hand side of the whole continuous model, xdot = f(t, x), for the reference solver:
+ * time s since the beginning of the current step (the set-point follows the step's command),
+ * with d's held errors. Context: RT. */
+void urt_rhs(const urt_model_t *m, const urt_data_t *d, double s, const double *x, double *xdot);
+
+/* Recompute d's derived outputs (torques, measurements, TCP pose) from its state.
+ * Context: RT. */
+void urt_data_update_outputs(const urt_model_t *m, urt_data_t *d);
+
+/* Sample the sensors: draw noise, quantise and hold the measurement errors for the next
+ * step (called by urt_step at the start of each step). Context: RT. */
+void urt_sensors_sample(const urt_model_t *m, urt_data_t *d);
+
+//---- arm (rigid-body kinematics and dynamics of the Hayati-DH chain) ----
+
+/* TCP pose in the base frame: x y z [m], then the axis-angle rotation vector [rad] (UR
+ * convention, angle in [0, π]). Context: RT. */
+void urt_arm_tcp_pose(const urt_model_t *m, const double q[URT_NJ], double pose[6]);
+
+/* Homogeneous transform of frame i (i = 0..6, 7 = TCP) in the base frame, row-major 4×4.
+ * Context: RT. */
+void urt_arm_frame(const urt_model_t *m, const double q[URT_NJ], int i, double T[16]);
+
+/* Geometric Jacobian of the TCP in the base frame, rows (v; ω), row-major 6×6. Context: RT. */
+void urt_arm_jacobian(const urt_model_t *m, const double q[URT_NJ], double J[36]);
+
+/* Inverse dynamics by RNEA: tau = M(q) q̈ + C(q, q̇) q̇ + g(q). Context: RT. */
+void urt_arm_rnea(const urt_model_t *m, const double q[URT_NJ], const double qd[URT_NJ],
+                  const double qdd[URT_NJ], double tau[URT_NJ]);
+
+/* Joint-space mass matrix M(q) by CRBA, row-major 6×6. Context: RT. */
+void urt_arm_mass_matrix(const urt_model_t *m, const double q[URT_NJ], double M[36]);
+
+/* Gravity torque g(q). Context: RT. */
+void urt_arm_gravity(const urt_model_t *m, const double q[URT_NJ], double g[URT_NJ]);
+
+/* Forward dynamics: q̈ = M⁻¹ (tau − C q̇ − g). Context: RT. */
+void urt_arm_forward_dynamics(const urt_model_t *m, const double q[URT_NJ],
+                              const double qd[URT_NJ], const double tau[URT_NJ],
+                              double qdd[URT_NJ]);
+
+/* Kinetic plus potential energy of the rigid arm (potential zero at the base origin). */
+double urt_arm_energy(const urt_model_t *m, const double q[URT_NJ], const double qd[URT_NJ]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

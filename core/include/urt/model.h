@@ -1,0 +1,94 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * core/include/urt/model.h — the robot's constant parameters, loaded once from config/*.yaml,
+ * validated, then frozen (const everywhere after urt_model_load). SI units throughout.
+ */
+#ifndef URT_MODEL_H
+#define URT_MODEL_H
+
+#include <stdint.h>
+
+#include "urt/drivers/friction.h"
+#include "urt/drivers/harmonic_drive.h"
+#include "urt/drivers/motor.h"
+#include "urt/drivers/pi_cascade.h"
+#include "urt/drivers/sensors.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define URT_NJ 6      /* joints of a UR arm */
+#define URT_NXJ 21    /* continuous states per joint (model.md §1.9) */
+#define URT_NXD 18    /* drive-block states per joint (all but q, q̇, z) */
+
+/* One link of the Hayati-modified DH chain (paper eq. 8, Table 4):
+ *   ^{i−1}A_i = Transl(z, d) · Rot(z, θ + q_i) · Transl(x, a) · Rot(x, α) · Rot(y, β)
+ * and its rigid-body data (Table 5) in DH frame i: CoM, inertia about the CoM with axes
+ * parallel to frame i. */
+typedef struct urt_link_params {
+  double a;          /* [m]   */
+  double alpha;      /* [rad] */
+  double beta;       /* [rad] */
+  double d;          /* [m]   */
+  double theta;      /* joint offset added to q_i [rad] */
+  double mass;       /* [kg]  */
+  double com[3];     /* CoM in frame i [m] */
+  double inertia[6]; /* Ixx, Iyy, Izz, Ixy, Ixz, Iyz about the CoM [kg m²] */
+} urt_link_params_t;
+
+typedef struct urt_arm_params {
+  urt_link_params_t link[URT_NJ];
+  double gravity[3];       /* gravity in base frame 0 [m/s²] */
+  double tcp[6];           /* TCP offset from the flange: x y z [m], rx ry rz axis-angle [rad] */
+  /* derived by urt_arm_prepare(): the constant part of each link transform,
+   * Transl(x, a) · Rot(x, α) · Rot(y, β), row-major 3×4, and cos/sin of θ */
+  double fixed[URT_NJ][12];
+  double cos_theta[URT_NJ], sin_theta[URT_NJ];
+  double tcp_fixed[12];    /* flange → TCP, row-major 3×4 */
+} urt_arm_params_t;
+
+/* Fill the derived fields of an arm. Context: non-RT. */
+void urt_arm_prepare(urt_arm_params_t *a);
+
+/* Per-joint limits and identity. */
+typedef struct urt_joint_params {
+  char name[16];           /* "base", "shoulder", ...                 */
+  char size;               /* drive size 'A' or 'B'                   */
+  double q_min, q_max;     /* position limits                 [rad]   */
+  double qd_max;           /* speed limit                     [rad/s] */
+  double qdd_max;          /* acceleration-command limit      [rad/s²] */
+  double torque_max;       /* peak output torque, sets i_max  [N m]   */
+} urt_joint_params_t;
+
+typedef struct urt_model {
+  /* sizes and timing */
+  char name[32];           /* robot model, e.g. "UR5"                  */
+  double dt;               /* physics step                      [s]    */
+  double substep_h_max;    /* largest sub-step for stiff-friction joints [s] */
+  double substep_ratio;    /* sub-step a joint when dt·|g'_min|/J_out exceeds this [-] */
+  uint64_t seed;           /* sensor-noise RNG seed                     */
+  int drives_engaged;      /* 0: joints free (drive torque T_CS = 0)     */
+
+  /* arm */
+  urt_arm_params_t arm;
+  urt_joint_params_t joint[URT_NJ];
+
+  /* drives, one per joint */
+  urt_pi_cascade_params_t control[URT_NJ];
+  urt_motor_params_t motor[URT_NJ];
+  urt_harmonic_drive_params_t gear[URT_NJ];
+  urt_friction_params_t friction[URT_NJ];
+  urt_sensors_params_t sensors[URT_NJ];
+
+  /* initial state */
+  double q0[URT_NJ];       /* initial joint positions           [rad]  */
+
+  /* derived at load: integrator tables (precomputed W_d^-1 per active set), see integrator.h */
+  struct urt_integrator_tables *tables;  /* owned; NULL until urt_model_prepare() */
+  char source[256];        /* file the model came from (for messages)   */
+} urt_model_t;
+
+#ifdef __cplusplus
+}
+#endif
+#endif
