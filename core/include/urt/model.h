@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0
- * core/include/urt/model.h — the robot's constant parameters, loaded once from config/*.yaml,
+ * core/include/urt/model.h — the robot's constant parameters, loaded once from a config file
  * validated, then frozen (const everywhere after urt_model_load). SI units throughout.
  */
 #ifndef URT_MODEL_H

@@ -45,6 +45,7 @@ typedef struct urt_harmonic_drive_params {
   double alpha_n;      /* equivalent cam angle                           [rad]      */
   double m_fs;         /* equivalent FS mass                             [kg]       */
   double c_wg, c_b, c_m, c_fs, c_cs; /* dampings           [N m s/rad] or [N s/m]   */
+  double sin_n, cos_n, tan_n, sin_t, cos_t; /* of α_n and α_t, so the step calls no trig   */
 } urt_harmonic_drive_params_t;
 
 /* Positions and rates of the gear's bodies, plus the motor and joint ends. */

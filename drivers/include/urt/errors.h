@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0
- * core/include/urt/errors.h — one list of error codes for the whole project.
+ * drivers/include/urt/errors.h — one list of error codes for the whole project.
  * Every fallible function returns 0 (or a count) on success and a negative code on failure;
  * on failure, outputs and state are left unchanged. */
 #ifndef URT_ERRORS_H

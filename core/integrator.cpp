@@ -1,0 +1,402 @@
+// SPDX-License-Identifier: Apache-2.0
+// core/integrator.cpp — ROS2 with the structured per-joint solve. The scheme and the
+// splitting are described in integrator.hpp; the model equations in the drivers' headers.
+#include "integrator.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstring>
+
+#include "arm.hpp"
+#include "urt/drivers/friction.h"
+
+namespace urt::core {
+namespace {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using VecD = Eigen::Matrix<double, URT_NXD, 1>;
+using MatD = Eigen::Matrix<double, URT_NXD, URT_NXD, Eigen::RowMajor>;
+
+//---- the per-joint part of the W solve ----
+
+// Everything the stage solves need about one joint, frozen at the start of the (sub)step.
+struct JointW {
+  const DriveTables* tab;
+  int engaged;
+  double gh;           // γ h
+  double k_cs, c_cs;   // output spring of the gear [N m/rad, N m s/rad]
+  double a_zz;         // ∂ż/∂z
+  double f_z;          // k_z = e_z + f_z k_q̇
+  double t_z, t_qd;    // ∂T_f/∂z, ∂T_f/∂q̇
+  double c1;           // δT_net = c0 + c1 k_q̇
+};
+
+void joint_w_init(const urt_model_t* m, int j, int kind, const double* x, int active_set,
+                  JointW* w) noexcept {
+  const urt_integrator_tables* tab = m->tables;
+  const urt_friction_params_t& fp = m->friction[j];
+  w->tab = &tab->t[j][kind][active_set];
+  w->engaged = m->drives_engaged;
+  w->gh = kGamma * tab->h[kind];
+  w->k_cs = m->gear[j].k_cs;
+  w->c_cs = m->gear[j].c_cs;
+
+  // LuGre linearisation: T_f = σ0 z + σ1 ż, ż = q̇ − σ0 |q̇| z / g
+  urt_friction_out_t fr = urt_friction_eval(&fp, x[URT_X_QD], x[URT_X_Z]);
+  w->a_zz = fr.ddz_dz;
+  w->f_z = w->gh * fr.ddz_dqd / (1.0 - w->gh * fr.ddz_dz);
+  w->t_z = fp.enabled ? fp.sigma0 + fp.sigma1 * fr.ddz_dz : 0.0;
+  w->t_qd = fp.enabled ? fp.sigma1 * fr.ddz_dqd : 0.0;
+
+  // the joint's torque as an affine function of its k_q̇: drive block and q row substituted
+  w->c1 = -(w->t_z * w->f_z + w->t_qd);
+  if (w->engaged) {
+    const double* bd = w->tab->bd;
+    w->c1 += w->k_cs * bd[URT_X_QCS] + w->c_cs * bd[URT_X_QDCS] - w->k_cs * w->gh - w->c_cs;
+  }
+}
+
+// Partial solve of one joint's rows for a stage right-hand side r (21): a_d and e_z are the
+// parts of k_d and k_z that do not depend on k_q̇; returns c0.
+double joint_reduce(const JointW& w, const double* r, VecD& a_d, double* e_z) noexcept {
+  *e_z = r[URT_X_Z] / (1.0 - w.gh * w.a_zz);
+  double c0 = -w.t_z * *e_z;
+  if (w.engaged) {
+    Eigen::Map<const MatD> winv(w.tab->winv);
+    Eigen::Map<const VecD> rd(r), winv_bq(w.tab->winv_bq);
+    a_d.noalias() = winv * rd;
+    a_d += (w.gh * r[URT_X_Q]) * winv_bq;
+    c0 += w.k_cs * a_d[URT_X_QCS] + w.c_cs * a_d[URT_X_QDCS] - w.k_cs * r[URT_X_Q];
+  }
+  return c0;
+}
+
+// Back-substitution once k_q̇ is known.
+void joint_backsub(const JointW& w, const double* r, const VecD& a_d, double e_z, double k_qd,
+                   double* k) noexcept {
+  if (w.engaged) {
+    for (int i = 0; i < URT_NXD; i++) {
+      k[i] = a_d[i] + w.tab->bd[i] * k_qd;
+    }
+  } else {
+    for (int i = 0; i < URT_NXD; i++) {
+      k[i] = 0.0;
+    }
+  }
+  k[URT_X_QD] = k_qd;
+  k[URT_X_Q] = r[URT_X_Q] + w.gh * k_qd;
+  k[URT_X_Z] = e_z + w.f_z * k_qd;
+}
+
+// ∂f/∂t of the drive rows: the set-point moves (model.md §5.3a, detail i).
+void drive_ft(const JointW& w, const urt_command_t& c, int j, double s, double* ft) noexcept {
+  double qd_set = c.qd[j] + c.qdd[j] * s;
+  for (int i = 0; i < URT_NXJ; i++) {
+    ft[i] = 0.0;
+  }
+  if (w.engaged) {
+    for (int i = 0; i < URT_NXD; i++) {
+      ft[i] = w.tab->fq_set[i] * qd_set + w.tab->fqd_set[i] * c.qdd[j];
+    }
+  }
+}
+
+//---- arm ----
+
+// Joint torques of the external wrench at the TCP, τ = Jᵀ F (frozen over a step).
+void external_torque(const urt_model_t* m, const urt_data_t* d, Vec6& tau) noexcept {
+  tau.setZero();
+  bool any = false;
+  for (int i = 0; i < 6; i++) {
+    any = any || d->wrench_ext[i] != 0.0;
+  }
+  if (!any) {
+    return;
+  }
+  double q[URT_NJ], jac[36];
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = d->x[j][URT_X_Q];
+  }
+  urt_arm_jacobian(m, q, jac);
+  Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> J(jac);
+  Eigen::Map<const Vec6> w(d->wrench_ext);
+  tau.noalias() = J.transpose() * w;
+}
+
+// The arm's accelerations for the macro joints given the joint torques, with the
+// sub-stepped joints' accelerations prescribed. Rows and columns of prescribed joints are
+// replaced by identity in Mm so that one 6×6 Cholesky serves (the macro block stays SPD).
+void arm_accel(const urt_model_t* m, const double (*x)[URT_NXJ], const Vec6& tau,
+               const Vec6& qdd_pres, Mat6* mm_out, Vec6& qdd) noexcept {
+  const urt_integrator_tables* tab = m->tables;
+  Vec6 q, qd, qdd_known, bias;
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = x[j][URT_X_Q];
+    qd[j] = x[j][URT_X_QD];
+    qdd_known[j] = tab->substepped[j] ? qdd_pres[j] : 0.0;
+  }
+  Mat6 mm;
+  crba(m->arm, q, mm);
+  rnea(m->arm, q, qd, qdd_known, bias);
+  Vec6 rhs = tau - bias;
+  for (int j = 0; j < URT_NJ; j++) {
+    if (tab->substepped[j]) {
+      mm.row(j).setZero();
+      mm.col(j).setZero();
+      mm(j, j) = 1.0;
+      rhs[j] = qdd_pres[j];
+    }
+  }
+  qdd = mm.llt().solve(rhs);
+  if (mm_out) {
+    *mm_out = mm;
+  }
+}
+
+// f(t_n + s, X) for the macro joints (all 21 rates) and q, q̇ rates of the sub-stepped ones.
+void macro_rates(const urt_model_t* m, const urt_data_t* d, double s,
+                 const double (*x)[URT_NXJ], const Vec6& tau_ext, const Vec6& qdd_pres,
+                 double (*f)[URT_NXJ], JointAux* aux, Mat6* mm) noexcept {
+  const urt_integrator_tables* tab = m->tables;
+  Vec6 tau;
+  for (int j = 0; j < URT_NJ; j++) {
+    if (tab->substepped[j]) {
+      std::memset(f[j], 0, sizeof f[j]);
+      f[j][URT_X_Q] = x[j][URT_X_QD];
+      tau[j] = 0.0;
+      continue;
+    }
+    tau[j] = joint_rates(m, d, j, s, x[j], f[j], &aux[j]) + tau_ext[j];
+  }
+  Vec6 qdd;
+  arm_accel(m, x, tau, qdd_pres, mm, qdd);
+  for (int j = 0; j < URT_NJ; j++) {
+    f[j][URT_X_QD] = qdd[j];
+  }
+}
+
+//---- sub-stepped joints ----
+
+// One joint as a 1-DoF system on the frozen arm: M_pp q̈ = T_net + τ_ext − b.
+double sub_rates(const urt_model_t* m, const urt_data_t* d, int p, double s, const double* x,
+                 double m_pp, double b, double tau_ext, double* f, JointAux* aux) noexcept {
+  double t_net = joint_rates(m, d, p, s, x, f, aux);
+  f[URT_X_QD] = (t_net + tau_ext - b) / m_pp;
+  return t_net;
+}
+
+void substep_joint(const urt_model_t* m, urt_data_t* d, int p, double m_pp, double b,
+                   double tau_ext) noexcept {
+  const urt_integrator_tables* tab = m->tables;
+  const double h = tab->h[kSub];
+  double* x = d->x[p];
+  double f[URT_NXJ], ft[URT_NXJ], r[URT_NXJ], k1[URT_NXJ], k2[URT_NXJ], x2[URT_NXJ];
+  JointAux aux;
+  JointW w;
+  VecD a_d;
+  double e_z;
+
+  for (int n = 0; n < tab->n_sub; n++) {
+    double s = n * h;
+
+    // stage 1 at the sub-step's start, where W is frozen
+    sub_rates(m, d, p, s, x, m_pp, b, tau_ext, f, &aux);
+    joint_w_init(m, p, kSub, x, aux.active_set, &w);
+    double den = m_pp - w.gh * w.c1;
+    drive_ft(w, d->cmd, p, s, ft);
+    for (int i = 0; i < URT_NXJ; i++) {
+      r[i] = f[i] + w.gh * ft[i];
+    }
+    double c0 = joint_reduce(w, r, a_d, &e_z);
+    joint_backsub(w, r, a_d, e_z, (m_pp * r[URT_X_QD] + w.gh * c0) / den, k1);
+
+    // stage 2 at the sub-step's end
+    for (int i = 0; i < URT_NXJ; i++) {
+      x2[i] = x[i] + h * k1[i];
+    }
+    sub_rates(m, d, p, s + h, x2, m_pp, b, tau_ext, f, &aux);
+    for (int i = 0; i < URT_NXJ; i++) {
+      r[i] = f[i] - 2.0 * k1[i] - w.gh * ft[i];
+    }
+    c0 = joint_reduce(w, r, a_d, &e_z);
+    joint_backsub(w, r, a_d, e_z, (m_pp * r[URT_X_QD] + w.gh * c0) / den, k2);
+
+    for (int i = 0; i < URT_NXJ; i++) {
+      x[i] += h * (1.5 * k1[i] + 0.5 * k2[i]);
+    }
+  }
+}
+
+}  // namespace
+
+//---- one macro step ----
+
+void integrator_step(const urt_model_t* m, urt_data_t* d) noexcept {
+  const urt_integrator_tables* tab = m->tables;
+  const double h = tab->h[kMacro];
+  double (*x)[URT_NXJ] = d->x;
+
+  Vec6 tau_ext;
+  external_torque(m, d, tau_ext);
+
+  // sub-stepped joints first, on the arm frozen at t_n: their inertia M_pp and bias
+  // (Coriolis, gravity, and the other joints' last accelerations through M_pk)
+  Vec6 qdd_pres = Vec6::Zero();
+  double sub_end[URT_NJ][URT_NXJ];
+  bool any_sub = false;
+  for (int p = 0; p < URT_NJ; p++) {
+    any_sub = any_sub || tab->substepped[p];
+  }
+  if (any_sub) {
+    Vec6 q, qd, qdd_prev, bias;
+    Mat6 mass;
+    for (int j = 0; j < URT_NJ; j++) {
+      q[j] = x[j][URT_X_Q];
+      qd[j] = x[j][URT_X_QD];
+      qdd_prev[j] = tab->substepped[j] ? 0.0 : d->qdd_prev[j];
+    }
+    crba(m->arm, q, mass);
+    for (int p = 0; p < URT_NJ; p++) {
+      if (!tab->substepped[p]) {
+        continue;
+      }
+      Vec6 qdd_other = qdd_prev;
+      qdd_other[p] = 0.0;
+      rnea(m->arm, q, qd, qdd_other, bias);
+      double qd0 = x[p][URT_X_QD];
+      double q0 = x[p][URT_X_Q];
+      double z0 = x[p][URT_X_Z];
+      double drive0[URT_NXD];
+      std::memcpy(drive0, x[p], sizeof drive0);
+      substep_joint(m, d, p, mass(p, p), bias[p], tau_ext[p]);
+      qdd_pres[p] = (x[p][URT_X_QD] - qd0) / h;
+
+      // the macro step integrates this joint's q, q̇ again from t_n with the mean
+      // acceleration; restore its start values and keep the sub-stepped end state aside
+      double end[URT_NXJ];
+      std::memcpy(end, x[p], sizeof end);
+      std::memcpy(x[p], drive0, sizeof drive0);
+      x[p][URT_X_Q] = q0;
+      x[p][URT_X_QD] = qd0;
+      x[p][URT_X_Z] = z0;
+      std::memcpy(sub_end[p], end, sizeof end);
+    }
+  }
+
+  // stage 1: f(t_n, x_n), W from the active sets and friction slopes at x_n
+  double f[URT_NJ][URT_NXJ], k1[URT_NJ][URT_NXJ], k2[URT_NJ][URT_NXJ], x2[URT_NJ][URT_NXJ];
+  double r[URT_NJ][URT_NXJ], ft[URT_NJ][URT_NXJ];
+  JointAux aux[URT_NJ];
+  JointW w[URT_NJ];
+  VecD a_d[URT_NJ];
+  double e_z[URT_NJ];
+  Mat6 mm;
+  macro_rates(m, d, 0.0, x, tau_ext, qdd_pres, f, aux, &mm);
+
+  Mat6 wmat = mm;
+  const double gh = kGamma * h;
+  for (int j = 0; j < URT_NJ; j++) {
+    if (tab->substepped[j]) {
+      std::memset(ft[j], 0, sizeof ft[j]);
+      continue;
+    }
+    joint_w_init(m, j, kMacro, x[j], aux[j].active_set, &w[j]);
+    wmat(j, j) -= gh * w[j].c1;
+    drive_ft(w[j], d->cmd, j, 0.0, ft[j]);
+    d->isat_count += (aux[j].active_set & kCurrentSat) != 0;
+    d->vsat_count += (aux[j].active_set & kVoltageSat) != 0;
+  }
+#ifdef URT_ARM_JAC
+  // experiment: the arm's own linearisation, B_q = ∂(rnea)/∂q, B_q̇ = ∂(rnea)/∂q̇ at x_n
+  Mat6 bq = Mat6::Zero(), bqd = Mat6::Zero();
+  {
+    Vec6 q, qd, a, t0, t1;
+    for (int j = 0; j < URT_NJ; j++) {
+      q[j] = x[j][URT_X_Q];
+      qd[j] = x[j][URT_X_QD];
+      a[j] = f[j][URT_X_QD];
+    }
+    rnea(m->arm, q, qd, a, t0);
+    for (int c = 0; c < URT_NJ; c++) {
+      double e = 1e-7;
+      Vec6 qp = q; qp[c] += e;
+      rnea(m->arm, qp, qd, a, t1);
+      bq.col(c) = (t1 - t0) / e;
+      Vec6 qdp = qd; qdp[c] += e;
+      rnea(m->arm, q, qdp, a, t1);
+      bqd.col(c) = (t1 - t0) / e;
+    }
+    for (int j = 0; j < URT_NJ; j++) {
+      if (tab->substepped[j]) {
+        bq.row(j).setZero(); bq.col(j).setZero(); bqd.row(j).setZero(); bqd.col(j).setZero();
+      }
+    }
+    wmat += gh * bqd + gh * gh * bq;
+  }
+  Eigen::PartialPivLU<Mat6> wfac(wmat);
+#else
+  Eigen::LLT<Mat6> wfac(wmat);
+#endif
+
+  // one stage solve: per-joint reduction, the 6×6 arm system, back-substitution
+  auto solve = [&](double (*rr)[URT_NXJ], double (*k)[URT_NXJ]) {
+    Vec6 rqd, c0 = Vec6::Zero();
+    for (int j = 0; j < URT_NJ; j++) {
+      rqd[j] = rr[j][URT_X_QD];
+      if (!tab->substepped[j]) {
+        c0[j] = joint_reduce(w[j], rr[j], a_d[j], &e_z[j]);
+      }
+    }
+    Vec6 rhs = mm * rqd + gh * c0;
+#ifdef URT_ARM_JAC
+    Vec6 rq;
+    for (int j = 0; j < URT_NJ; j++) rq[j] = rr[j][URT_X_Q];
+    rhs -= gh * bq * rq;
+#endif
+    Vec6 kqd = wfac.solve(rhs);
+    for (int j = 0; j < URT_NJ; j++) {
+      if (tab->substepped[j]) {
+        std::memset(k[j], 0, sizeof k[j]);
+        k[j][URT_X_QD] = kqd[j];
+        k[j][URT_X_Q] = rr[j][URT_X_Q] + gh * kqd[j];
+      } else {
+        joint_backsub(w[j], rr[j], a_d[j], e_z[j], kqd[j], k[j]);
+      }
+    }
+  };
+
+  for (int j = 0; j < URT_NJ; j++) {
+    for (int i = 0; i < URT_NXJ; i++) {
+      r[j][i] = f[j][i] + gh * ft[j][i];
+    }
+  }
+  solve(r, k1);
+
+  // stage 2: f(t_n + h, x_n + h k1)
+  for (int j = 0; j < URT_NJ; j++) {
+    for (int i = 0; i < URT_NXJ; i++) {
+      x2[j][i] = x[j][i] + h * k1[j][i];
+    }
+  }
+  macro_rates(m, d, h, x2, tau_ext, qdd_pres, f, aux, nullptr);
+  for (int j = 0; j < URT_NJ; j++) {
+    for (int i = 0; i < URT_NXJ; i++) {
+      r[j][i] = f[j][i] - 2.0 * k1[j][i] - gh * ft[j][i];
+    }
+  }
+  solve(r, k2);
+
+  // update; the sub-stepped joints take their own end state
+  for (int j = 0; j < URT_NJ; j++) {
+    if (tab->substepped[j]) {
+      std::memcpy(x[j], sub_end[j], sizeof x[j]);
+      continue;
+    }
+    for (int i = 0; i < URT_NXJ; i++) {
+      x[j][i] += h * (1.5 * k1[j][i] + 0.5 * k2[j][i]);
+    }
+  }
+}
+
+}  // namespace urt::core

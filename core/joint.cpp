@@ -1,0 +1,119 @@
+// SPDX-License-Identifier: Apache-2.0
+// core/joint.cpp — one joint's 18-state drive block: PI cascade → PWM → motor → gear, with
+// the sensor filters. Equations live in the drivers' headers; this file only wires them.
+#include "joint.hpp"
+
+#include <cmath>
+
+#include "urt/data.h"
+#include "urt/drivers/friction.h"
+
+namespace urt::core {
+
+void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& in, int forced,
+               double* f, JointAux* aux) noexcept {
+  const urt_pi_cascade_params_t& pc = m->control[j];
+  const urt_motor_params_t& mp = m->motor[j];
+  const urt_harmonic_drive_params_t& gp = m->gear[j];
+  const urt_sensors_params_t& sp = m->sensors[j];
+
+  // measurements: continuous filter outputs plus the held error of this sample
+  double i_fb = x[URT_X_I_F] + in.eps_i;
+  double qdm_fb = x[URT_X_W] + in.eps_w;
+  double q_fb = x[URT_X_P] + in.eps_q;
+
+  // controller: natural saturations, or forced ones for the tables
+  urt_pi_cascade_in_t ci = {in.q_set, in.qd_set, in.i_ff, q_fb, qdm_fb, i_fb,
+                            x[URT_X_XI_V], x[URT_X_XI_C]};
+  urt_pi_cascade_out_t co;
+  if (forced == kNatural) {
+    co = urt_pi_cascade_eval(&pc, gp.ratio, &ci);
+  } else {
+    // affine in x: saturated signals become constants, held integrators get zero rates
+    co.qdm_ref = pc.p_pos * (in.q_set - q_fb) + gp.ratio * in.qd_set;
+    double e_v = co.qdm_ref - qdm_fb;
+    co.i_sat = (forced & kCurrentSat) != 0;
+    co.i_ref = co.i_sat ? pc.i_max : pc.p_vel * e_v + pc.i_vel * x[URT_X_XI_V] + in.i_ff;
+    co.dxi_v = co.i_sat ? 0.0 : e_v;
+    double e_c = co.i_ref - i_fb;
+    co.v_sat = (forced & kVoltageSat) != 0;
+    co.v_sup = co.v_sat ? pc.v_net : pc.p_cur * e_c + pc.i_cur * x[URT_X_XI_C];
+    co.dxi_c = co.v_sat ? 0.0 : e_c;
+  }
+
+  // gear, with the arm's joint angle on its output side
+  urt_harmonic_drive_in_t gi = {x[URT_X_QM],  x[URT_X_QDM],  x[URT_X_QWG], x[URT_X_QDWG],
+                                x[URT_X_XFS], x[URT_X_XDFS], x[URT_X_YFS], x[URT_X_YDFS],
+                                x[URT_X_QCS], x[URT_X_QDCS], x[URT_X_Q],   x[URT_X_QD]};
+  urt_harmonic_drive_out_t go = urt_harmonic_drive_eval(&gp, &gi);
+
+  // motor
+  urt_motor_deriv_t md = urt_motor_deriv(&mp, x[URT_X_I], x[URT_X_QDM], co.v_sup, go.t_in);
+
+  // sensor filters (continuous; model.md §5.3c)
+  double tau_i = 1.0 / (2.0 * M_PI * sp.f_i);
+  double w_w = 2.0 * M_PI * sp.f_w, w_q = 2.0 * M_PI * sp.f_q;
+
+  f[URT_X_I] = md.di;
+  f[URT_X_XI_C] = co.dxi_c;
+  f[URT_X_I_F] = (x[URT_X_I] - x[URT_X_I_F]) / tau_i;
+  f[URT_X_QM] = x[URT_X_QDM];
+  f[URT_X_QDM] = md.dqd;
+  f[URT_X_QWG] = x[URT_X_QDWG];
+  f[URT_X_QDWG] = go.qdd_wg;
+  f[URT_X_XFS] = x[URT_X_XDFS];
+  f[URT_X_XDFS] = go.xdd_fs;
+  f[URT_X_YFS] = x[URT_X_YDFS];
+  f[URT_X_YDFS] = go.ydd_fs;
+  f[URT_X_QCS] = x[URT_X_QDCS];
+  f[URT_X_QDCS] = go.qdd_cs;
+  f[URT_X_XI_V] = co.dxi_v;
+  f[URT_X_W] = x[URT_X_WD];
+  f[URT_X_WD] = w_w * w_w * (x[URT_X_QDM] - x[URT_X_W]) - 2.0 * sp.zeta_w * w_w * x[URT_X_WD];
+  f[URT_X_P] = x[URT_X_PD];
+  f[URT_X_PD] = w_q * w_q * (x[URT_X_Q] - x[URT_X_P]) - 2.0 * sp.zeta_q * w_q * x[URT_X_PD];
+
+  // disengaged drives (brakes released, no gear): the block holds still and passes no torque
+  if (!in.drives_engaged) {
+    for (int k = 0; k < URT_NXD; k++) {
+      f[k] = 0.0;
+    }
+    go.t_cs = 0.0;
+  }
+
+  if (aux) {
+    aux->t_cs = go.t_cs;
+    aux->t_in = go.t_in;
+    aux->i_ref = co.i_ref;
+    aux->v_sup = co.v_sup;
+    aux->i_fb = i_fb;
+    aux->qdm_fb = qdm_fb;
+    aux->q_fb = q_fb;
+    aux->active_set = (co.i_sat ? kCurrentSat : 0) | (co.v_sat ? kVoltageSat : 0);
+  }
+}
+
+// within a step the set-point is the quadratic the command describes
+JointInput joint_input(const urt_model_t* m, const urt_data_t* d, int j, double s) noexcept {
+  const urt_command_t& c = d->cmd;
+  JointInput in;
+  in.q_set = c.q[j] + c.qd[j] * s + 0.5 * c.qdd[j] * s * s;
+  in.qd_set = c.qd[j] + c.qdd[j] * s;
+  in.i_ff = c.tau_ff[j] / (m->motor[j].kt * m->gear[j].ratio);
+  in.eps_i = d->eps_i[j];
+  in.eps_w = d->eps_w[j];
+  in.eps_q = d->eps_q[j];
+  in.drives_engaged = m->drives_engaged;
+  return in;
+}
+
+double joint_rates(const urt_model_t* m, const urt_data_t* d, int j, double s, const double* x,
+                   double* f, JointAux* aux) noexcept {
+  drive_rhs(m, j, x, joint_input(m, d, j, s), kNatural, f, aux);
+  urt_friction_out_t fr = urt_friction_eval(&m->friction[j], x[URT_X_QD], x[URT_X_Z]);
+  f[URT_X_Q] = x[URT_X_QD];
+  f[URT_X_Z] = fr.dz;
+  return aux->t_cs - fr.t_f;
+}
+
+}  // namespace urt::core

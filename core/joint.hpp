@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: Apache-2.0
+// core/joint.hpp — one joint's drive (controller, PWM, motor, gear, sensors) and friction
+// assembled into the 21-state right-hand side of model.md §1.9. Internal to the core.
+#ifndef URT_CORE_JOINT_HPP
+#define URT_CORE_JOINT_HPP
+
+#include "urt/data.h"
+#include "urt/model.h"
+
+namespace urt::core {
+
+// Which saturations the right-hand side assumes. kNatural evaluates them from the state;
+// the forced sets make the drive block exactly affine, which is how the integrator tables
+// take its Jacobian (model.md §5.2: the Jacobian must match the active saturation set).
+enum ActiveSet : int {
+  kFree = 0,         // neither i_ref nor V saturated
+  kCurrentSat = 1,   // i_ref at ±i_max, ξ_v held
+  kVoltageSat = 2,   // V at ±V_net, ξ_c held
+  kBothSat = 3,
+  kNumActiveSets = 4,
+  kNatural = -1
+};
+
+// Set-point and held measurement errors the joint sees during one step.
+struct JointInput {
+  double q_set, qd_set;    // set-point at the evaluation time [rad, rad/s]
+  double i_ff;             // current feed-forward [A]
+  double eps_i, eps_w, eps_q;  // held measurement errors (sensors.h)
+  int drives_engaged;
+};
+
+// Signals computed along the way, for outputs and for the integrator.
+struct JointAux {
+  double t_cs;      // gear output torque [N m]
+  double t_in;      // WG input torque [N m]
+  double i_ref;     // current reference [A]
+  double v_sup;     // motor voltage [V]
+  double i_fb, qdm_fb, q_fb;  // measurements [A, rad/s, rad]
+  int active_set;   // ActiveSet the state is in
+};
+
+// Rates of the 18 drive-block states (rows 0..17 of f). With forced = kNatural the saturations
+// follow the state; otherwise they are forced to `forced` (the set-point's sign decides the
+// saturated value). Rows 18..20 (q, q̇, z) are left untouched. Context: RT.
+void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& in, int forced,
+               double* f, JointAux* aux) noexcept;
+
+// The joint's inputs at time s into the current step: the command's quadratic set-point,
+// the torque feed-forward as a current, and the held sensor errors. Context: RT.
+JointInput joint_input(const urt_model_t* m, const urt_data_t* d, int j, double s) noexcept;
+
+// Rates of the 18 drive-block states plus q and z rows (natural saturations), and the net
+// torque the joint puts on the arm (gear output minus friction) as the return value. The q̇
+// row is left to the arm. Context: RT.
+double joint_rates(const urt_model_t* m, const urt_data_t* d, int j, double s, const double* x,
+                   double* f, JointAux* aux) noexcept;
+
+}  // namespace urt::core
+
+#endif

@@ -1,0 +1,848 @@
+// SPDX-License-Identifier: Apache-2.0
+// core/model_load.cpp — urt_model_load(): read a robot parameter file (config/ur5.yaml),
+// apply command-line overrides to the YAML tree, validate every key (unknown, missing, type,
+// range, list length, cross-field rules), fill urt_model_t in SI units and hand it to
+// urt_model_prepare() for the derived values.
+//
+// Errors read "file:line: key.path: reason". The line is the 1-based line of the offending
+// key (of the list element for list items, of the parent map for a missing key); a value that
+// came from an override reports "override" instead of a line. Key paths are written with
+// 0-based list indices in brackets: joints[1].motor.kt (joints[0] is the base, paper joint 1).
+//
+// Context: non-RT. C++ exceptions are used internally and all of them stop at urt_model_load.
+
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <new>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "urt/core.h"
+
+namespace urt::core {
+namespace {  // file-local: nothing here is visible to the linker
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// A load failure: the URT_E* code and the full "file:line: key: reason" text.
+struct LoadError {
+  int code;
+  std::string msg;
+};
+
+// %g for bounds in messages: short, and exact enough to see which bound was hit.
+std::string fmt_g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+// Key path of a map entry or a list element: "arm.links[2].mass".
+std::string join_key(const std::string &path, const std::string &key) {
+  return path.empty() ? key : path + "." + key;
+}
+std::string join_index(const std::string &path, size_t i) {
+  return path + "[" + std::to_string(i) + "]";
+}
+
+//---- where values came from: the file, or an override ----
+
+class Origin {
+ public:
+  explicit Origin(std::string file) : file_(std::move(file)) {}
+
+  const std::string &file() const { return file_; }
+
+  // Remember a key path an override replaced or created; everything at or below it is
+  // reported as "override" rather than with a file line.
+  void add_override_path(const std::string &path) { overrides_.push_back(path); }
+
+  [[noreturn]] void fail(const std::string &path, int line, const std::string &reason) const {
+    std::string where = from_override(path) ? "override" : std::to_string(line > 0 ? line : 1);
+    throw LoadError{URT_ECONFIG,
+                    file_ + ":" + where + ": " + (path.empty() ? "(document)" : path) + ": " +
+                        reason};
+  }
+
+  [[noreturn]] void fail_override(const std::string &key, const std::string &reason) const {
+    throw LoadError{URT_ECONFIG, file_ + ":override: " + key + ": " + reason};
+  }
+
+ private:
+  bool from_override(const std::string &path) const {
+    for (const std::string &o : overrides_) {
+      if (path.compare(0, o.size(), o) == 0 &&
+          (path.size() == o.size() || path[o.size()] == '.' || path[o.size()] == '[')) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  std::string file_;
+  std::vector<std::string> overrides_;
+};
+
+//---- allowed ranges of numbers ----
+
+struct Range {
+  double lo = -kInf, hi = kInf;
+  bool lo_open = false, hi_open = false;
+  const char *text = nullptr;  // replaces the generated wording, e.g. "in [-pi, pi] rad"
+
+  bool contains(double v) const {
+    bool lo_ok = lo_open ? v > lo : v >= lo;
+    bool hi_ok = hi_open ? v < hi : v <= hi;
+    return lo_ok && hi_ok;
+  }
+
+  std::string describe() const {
+    if (text) {
+      return text;
+    }
+    bool has_lo = std::isfinite(lo), has_hi = std::isfinite(hi);
+    if (has_lo && has_hi) {
+      return std::string("in ") + (lo_open ? "(" : "[") + fmt_g(lo) + ", " + fmt_g(hi) +
+             (hi_open ? ")" : "]");
+    }
+    if (has_lo) {
+      return (lo_open ? "> " : ">= ") + fmt_g(lo);
+    }
+    if (has_hi) {
+      return (hi_open ? "< " : "<= ") + fmt_g(hi);
+    }
+    return "finite";
+  }
+};
+
+Range any_finite() { return Range{}; }
+Range gt(double lo) { return Range{lo, kInf, true, false, nullptr}; }
+Range ge(double lo) { return Range{lo, kInf, false, false, nullptr}; }
+Range in(double lo, double hi) { return Range{lo, hi, false, false, nullptr}; }
+Range in_lo_open(double lo, double hi) { return Range{lo, hi, true, false, nullptr}; }
+Range in_open(double lo, double hi, const char *text) { return Range{lo, hi, true, true, text}; }
+// angles are checked against ±π, which also catches a value left in degrees
+Range angle() { return Range{-kPi, kPi, false, false, "in [-pi, pi] rad"}; }
+
+//---- scalar parsing (strict: YAML core-schema numbers and booleans only) ----
+
+// A plain (unquoted) decimal number, or one of YAML's .inf/.nan spellings.
+bool parse_double(const std::string &s, double *out) {
+  static const char *const pos_inf[] = {".inf", ".Inf", ".INF", "+.inf", "+.Inf", "+.INF"};
+  static const char *const neg_inf[] = {"-.inf", "-.Inf", "-.INF"};
+  static const char *const nan[] = {".nan", ".NaN", ".NAN"};
+  for (const char *t : pos_inf) {
+    if (s == t) {
+      *out = kInf;
+      return true;
+    }
+  }
+  for (const char *t : neg_inf) {
+    if (s == t) {
+      *out = -kInf;
+      return true;
+    }
+  }
+  for (const char *t : nan) {
+    if (s == t) {
+      *out = std::numeric_limits<double>::quiet_NaN();
+      return true;
+    }
+  }
+
+  // only digits, sign, point and exponent: from_chars would also take "inf", "nan" and hex
+  if (s.empty() || s.find_first_not_of("0123456789+-.eE") != std::string::npos) {
+    return false;
+  }
+  const char *b = s.data(), *e = s.data() + s.size();
+  if (*b == '+') {
+    b++;
+  }
+  auto [p, ec] = std::from_chars(b, e, *out, std::chars_format::general);
+  if (ec == std::errc::result_out_of_range) {
+    *out = (*b == '-') ? -kInf : kInf;
+    return p == e;
+  }
+  return ec == std::errc() && p == e;
+}
+
+// How a node looks, for "(got ...)" in messages.
+std::string describe_node(const YAML::Node &n) {
+  switch (n.Type()) {
+    case YAML::NodeType::Map:
+      return "a map";
+    case YAML::NodeType::Sequence:
+      return "a list";
+    case YAML::NodeType::Scalar:
+      return n.Tag() == "!" ? "\"" + n.Scalar() + "\"" : "'" + n.Scalar() + "'";
+    default:
+      return "nothing";
+  }
+}
+
+//---- a value in the tree with its key path and line ----
+
+class Map;
+
+class Field {
+ public:
+  Field(const Origin *origin, YAML::Node node, std::string path, int line)
+      : origin_(origin), node_(std::move(node)), path_(std::move(path)), line_(line) {}
+
+  const std::string &path() const { return path_; }
+  int line() const { return line_; }
+  const Origin &origin() const { return *origin_; }
+
+  [[noreturn]] void fail(const std::string &reason) const { origin_->fail(path_, line_, reason); }
+
+  double number(const Range &r) const {
+    const std::string &s = scalar_for("must be a number");
+    double v = 0.0;
+    if (!parse_double(s, &v)) {
+      fail("must be a number (got " + describe_node(node_) + ")");
+    }
+    if (!std::isfinite(v)) {
+      fail("must be finite (got " + s + ")");
+    }
+    if (!r.contains(v)) {
+      fail("must be " + r.describe() + " (got " + s + ")");
+    }
+    return v;
+  }
+
+  uint64_t integer(uint64_t lo, uint64_t hi) const {
+    std::string what = "must be an integer in [" + std::to_string(lo) + ", " +
+                       std::to_string(hi) + "]";
+    const std::string &s = scalar_for(what);
+    const char *b = s.data(), *e = s.data() + s.size();
+    if (b != e && *b == '+') {
+      b++;
+    }
+    uint64_t v = 0;
+    auto [p, ec] = std::from_chars(b, e, v, 10);
+    if (b == e || ec != std::errc() || p != e || v < lo || v > hi) {
+      fail(what + " (got " + describe_node(node_) + ")");
+    }
+    return v;
+  }
+
+  bool boolean() const {
+    const std::string &s = scalar_for("must be true or false");
+    if (s == "true" || s == "True" || s == "TRUE") {
+      return true;
+    }
+    if (s == "false" || s == "False" || s == "FALSE") {
+      return false;
+    }
+    fail("must be true or false (got " + describe_node(node_) + ")");
+  }
+
+  // An identifier: 1..max_len characters of [A-Za-z0-9_.+-] (safe to print in YAML and JSON).
+  std::string name(size_t max_len) const {
+    if (!node_.IsScalar()) {
+      fail("must be a name (got " + describe_node(node_) + ")");
+    }
+    const std::string &s = node_.Scalar();
+    if (s.empty() || s.size() > max_len ||
+        s.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.+-") !=
+            std::string::npos) {
+      fail("must be 1 to " + std::to_string(max_len) +
+           " characters of A-Z a-z 0-9 _ . + - (got " + describe_node(node_) + ")");
+    }
+    return s;
+  }
+
+  // One of a few fixed words, e.g. the drive size A or B.
+  std::string choice(std::initializer_list<const char *> words) const {
+    std::vector<const char *> list(words);
+    std::string what = "must be ";
+    for (size_t i = 0; i < list.size(); i++) {
+      what += i == 0 ? "" : (i + 1 == list.size() ? " or " : ", ");
+      what += list[i];
+    }
+    if (node_.IsScalar()) {
+      for (const char *w : words) {
+        if (node_.Scalar() == w) {
+          return w;
+        }
+      }
+    }
+    fail(what + " (got " + describe_node(node_) + ")");
+  }
+
+  Map map(std::initializer_list<const char *> keys) const;
+
+  // A list of exactly n elements, each with its own path and line.
+  std::vector<Field> list(size_t n) const {
+    std::string what = "must be a list of " + std::to_string(n);
+    if (!node_.IsSequence()) {
+      fail(what + " (got " + describe_node(node_) + ")");
+    }
+    if (node_.size() != n) {
+      fail(what + " (got " + std::to_string(node_.size()) + ")");
+    }
+    std::vector<Field> out;
+    for (size_t i = 0; i < n; i++) {
+      YAML::Node e = node_[i];
+      int line = e.Mark().line >= 0 ? e.Mark().line + 1 : line_;
+      out.emplace_back(origin_, e, join_index(path_, i), line);
+    }
+    return out;
+  }
+
+  // A list of exactly n numbers, each in r.
+  void numbers(double *out, size_t n, const Range &r) const {
+    std::vector<Field> items = list(n);
+    for (size_t i = 0; i < n; i++) {
+      out[i] = items[i].number(r);
+    }
+  }
+
+ private:
+  // The scalar text of a number/boolean; quoted strings are strings, not numbers.
+  const std::string &scalar_for(const std::string &what) const {
+    if (!node_.IsScalar()) {
+      fail(what + " (got " + describe_node(node_) + ")");
+    }
+    if (node_.Tag() == "!") {
+      fail(what + ", not a quoted string (got " + describe_node(node_) + ")");
+    }
+    return node_.Scalar();
+  }
+
+  const Origin *origin_;
+  YAML::Node node_;
+  std::string path_;
+  int line_;
+};
+
+// A map whose keys were checked: no unknown key, no duplicate, none of the listed keys missing.
+class Map {
+ public:
+  Map(const Field &self, const YAML::Node &node, std::initializer_list<const char *> keys) {
+    if (!node.IsMap()) {
+      self.fail("must be a map (got " + describe_node(node) + ")");
+    }
+
+    // unknown and duplicate keys first: a misspelt key is the likely cause of a missing one
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      // copies: it-> returns a proxy that dies with the full expression
+      YAML::Node k = it->first;
+      YAML::Node v = it->second;
+      int line = k.Mark().line >= 0 ? k.Mark().line + 1 : self.line();
+      if (!k.IsScalar()) {
+        self.origin().fail(self.path(), line,
+                           "keys must be strings (got " + describe_node(k) + ")");
+      }
+      std::string key = k.Scalar();
+      std::string path = join_key(self.path(), key);
+      bool known = false;
+      for (const char *allowed : keys) {
+        known = known || key == allowed;
+      }
+      if (!known) {
+        self.origin().fail(path, line, "unknown key");
+      }
+      for (const auto &e : entries_) {
+        if (e.first == key) {
+          self.origin().fail(path, line,
+                             "duplicate key (first at line " + std::to_string(e.second.line()) +
+                                 ")");
+        }
+      }
+      // the key's line, not the value's: a null or block value has its mark elsewhere
+      entries_.emplace_back(key, Field(&self.origin(), v, path, line));
+    }
+
+    // then missing keys, reported at the parent map's line
+    for (const char *allowed : keys) {
+      if (!find(allowed)) {
+        self.origin().fail(join_key(self.path(), allowed), self.line(), "missing key");
+      }
+    }
+  }
+
+  // only keys passed to the constructor: they are all present
+  const Field &operator[](const char *key) const { return *find(key); }
+
+ private:
+  const Field *find(const char *key) const {
+    for (const auto &e : entries_) {
+      if (e.first == key) {
+        return &e.second;
+      }
+    }
+    return nullptr;
+  }
+
+  std::vector<std::pair<std::string, Field>> entries_;
+};
+
+Map Field::map(std::initializer_list<const char *> keys) const { return Map(*this, node_, keys); }
+
+//---- overrides: "dotted.key=value" applied to the tree before validation ----
+
+struct PathPart {
+  bool is_index;
+  std::string key;
+  size_t index;
+};
+
+// "joints.1.motor.kt" or "joints[1].motor.kt" → parts; false if malformed.
+bool parse_key_path(const std::string &s, std::vector<PathPart> *parts) {
+  size_t i = 0;
+  bool want_name = true;  // a name must start the path and follow every '.'
+  while (i < s.size()) {
+    if (s[i] == '[') {
+      size_t close = s.find(']', i);
+      if (want_name || close == std::string::npos || close == i + 1) {
+        return false;
+      }
+      std::string digits = s.substr(i + 1, close - i - 1);
+      if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 6) {
+        return false;
+      }
+      parts->push_back({true, "", std::stoul(digits)});
+      i = close + 1;
+      if (i < s.size() && s[i] != '.' && s[i] != '[') {
+        return false;
+      }
+    } else if (s[i] == '.') {
+      if (want_name) {
+        return false;
+      }
+      want_name = true;
+      i++;
+    } else {
+      size_t end = s.find_first_of(".[", i);
+      if (end == std::string::npos) {
+        end = s.size();
+      }
+      std::string name = s.substr(i, end - i);
+      if (!want_name) {
+        return false;
+      }
+      // a purely numeric component is a list index (joints.1.motor)
+      if (name.find_first_not_of("0123456789") == std::string::npos && name.size() <= 6) {
+        parts->push_back({true, "", std::stoul(name)});
+      } else {
+        parts->push_back({false, name, 0});
+      }
+      want_name = false;
+      i = end;
+    }
+  }
+  return !parts->empty() && !want_name;
+}
+
+std::string canonical_path(const std::vector<PathPart> &parts) {
+  std::string out;
+  for (const PathPart &p : parts) {
+    out = p.is_index ? join_index(out, p.index) : join_key(out, p.key);
+  }
+  return out;
+}
+
+std::string trim(const std::string &s) {
+  size_t b = s.find_first_not_of(" \t");
+  size_t e = s.find_last_not_of(" \t");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+
+void apply_override(Origin *origin, YAML::Node root, const std::string &text) {
+  size_t eq = text.find('=');
+  if (eq == std::string::npos) {
+    origin->fail_override(text, "expected key=value");
+  }
+  std::string key = trim(text.substr(0, eq));
+  std::string value = trim(text.substr(eq + 1));
+  std::vector<PathPart> parts;
+  if (!parse_key_path(key, &parts)) {
+    origin->fail_override(key.empty() ? text : key,
+                          "malformed key (write a.b.c, list elements as a.1.b or a[1].b)");
+  }
+  std::string canonical = canonical_path(parts);
+
+  // the value is YAML itself, so lists ([0, 0, -9.81]) and maps can be overridden too
+  YAML::Node v;
+  try {
+    v = YAML::Load(value);
+  } catch (const YAML::Exception &e) {
+    origin->fail_override(canonical, "invalid YAML value: " + e.msg);
+  }
+
+  // walk to the parent; reset() rebinds the handle (operator= would overwrite the node)
+  YAML::Node cur;
+  cur.reset(root);
+  std::string path;
+  for (size_t k = 0; k < parts.size(); k++) {
+    const PathPart &p = parts[k];
+    bool last = k + 1 == parts.size();
+    if (p.is_index) {
+      std::string at = join_index(path, p.index);
+      if (!cur.IsSequence()) {
+        origin->fail_override(at, path.empty() ? "the document is not a list"
+                                               : path + " is not a list");
+      }
+      if (p.index >= cur.size()) {
+        origin->fail_override(at, "index out of range (list has " + std::to_string(cur.size()) +
+                                      " elements)");
+      }
+      path = at;
+      if (last) {
+        cur[p.index] = v;
+      } else {
+        YAML::Node next = cur[p.index];
+        cur.reset(next);
+      }
+    } else {
+      std::string at = join_key(path, p.key);
+      if (!cur.IsMap()) {
+        origin->fail_override(at, (path.empty() ? std::string("the document") : path) +
+                                      " is not a map");
+      }
+      path = at;
+      if (last) {
+        cur[p.key] = v;
+      } else {
+        // a missing intermediate map is created; validation then names what is wrong with it
+        if (!cur[p.key]) {
+          cur[p.key] = YAML::Node(YAML::NodeType::Map);
+          origin->add_override_path(path);
+        }
+        YAML::Node next = cur[p.key];
+        cur.reset(next);
+      }
+    }
+  }
+  origin->add_override_path(canonical);
+}
+
+//---- the model: one function per section of the file ----
+
+void load_simulation(const Field &f, urt_model_t *m) {
+  Map s = f.map({"dt", "seed", "drives_engaged", "substep_h_max", "substep_ratio"});
+  m->dt = s["dt"].number(in_lo_open(0.0, 1e-3));
+  m->seed = s["seed"].integer(0, std::numeric_limits<uint64_t>::max());
+  m->drives_engaged = s["drives_engaged"].boolean() ? 1 : 0;
+  m->substep_h_max = s["substep_h_max"].number(in_lo_open(0.0, 1e-3));
+  m->substep_ratio = s["substep_ratio"].number(gt(0.0));
+}
+
+// Inertia about the CoM: a physical rigid body has a positive-definite tensor whose diagonal
+// obeys the triangle inequality. The size bound (mass · 1 m²) catches Table 5's link-1 typo.
+void check_inertia(const Field &f, const double I[6], double mass) {
+  double xx = I[0], yy = I[1], zz = I[2], xy = I[3], xz = I[4], yz = I[5];
+  double m2 = xx * yy - xy * xy;
+  double det = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
+  if (!(xx > 0.0 && m2 > 0.0 && det > 0.0)) {
+    f.fail("must be positive definite");
+  }
+  if (xx + yy < zz || yy + zz < xx || zz + xx < yy) {
+    f.fail("diagonal must satisfy the triangle inequality (Ixx + Iyy >= Izz, ...)");
+  }
+  if (xx > mass || yy > mass || zz > mass) {
+    f.fail("moments must be <= mass * 1 m^2 (" + fmt_g(mass) +
+           " kg m^2): a value not in kg m^2, or a missing 1e-4?");
+  }
+}
+
+void load_arm(const Field &f, urt_arm_params_t *arm) {
+  Map a = f.map({"gravity", "tcp", "links"});
+  a["gravity"].numbers(arm->gravity, 3, in(-100.0, 100.0));
+  std::vector<Field> tcp = a["tcp"].list(6);
+  for (size_t i = 0; i < 6; i++) {
+    arm->tcp[i] = tcp[i].number(i < 3 ? in(-2.0, 2.0) : angle());
+  }
+  // the rotation vector's angle is its norm, in [0, pi]
+  if (std::hypot(arm->tcp[3], arm->tcp[4], arm->tcp[5]) > kPi) {
+    a["tcp"].fail("rotation vector (elements 3..5) must have norm <= pi");
+  }
+
+  std::vector<Field> links = a["links"].list(URT_NJ);
+  for (size_t i = 0; i < URT_NJ; i++) {
+    Map l = links[i].map({"a", "alpha", "beta", "d", "theta", "mass", "com", "inertia"});
+    urt_link_params_t *p = &arm->link[i];
+    p->a = l["a"].number(in(-2.0, 2.0));
+    p->alpha = l["alpha"].number(angle());
+    p->beta = l["beta"].number(angle());
+    p->d = l["d"].number(in(-2.0, 2.0));
+    p->theta = l["theta"].number(angle());
+    p->mass = l["mass"].number(in_lo_open(0.0, 1000.0));
+    l["com"].numbers(p->com, 3, in(-2.0, 2.0));
+    l["inertia"].numbers(p->inertia, 6, any_finite());
+    check_inertia(l["inertia"], p->inertia, p->mass);
+  }
+}
+
+void load_gear(const Field &f, urt_harmonic_drive_params_t *g) {
+  Map s = f.map({"z_fs", "z_cs", "r_g", "alpha_t", "k_wg", "k_b", "k_fs", "k_m", "k_cs", "j_wg",
+                 "j_fs", "j_cs", "zeta"});
+  g->z_fs = static_cast<double>(s["z_fs"].integer(1, 100000));
+  g->z_cs = static_cast<double>(s["z_cs"].integer(1, 100000));
+  // the CS has more teeth than the FS, or the ratio Z_CS/(Z_CS − Z_FS) is not a reduction
+  if (g->z_cs <= g->z_fs) {
+    s["z_cs"].fail("must be > z_fs (" + fmt_g(g->z_fs) + ")");
+  }
+  g->r_g = s["r_g"].number(in_lo_open(0.0, 1.0));
+  g->alpha_t = s["alpha_t"].number(in_open(0.0, kPi / 2, "in (0, pi/2) rad"));
+  g->k_wg = s["k_wg"].number(gt(0.0));
+  g->k_b = s["k_b"].number(gt(0.0));
+  g->k_fs = s["k_fs"].number(gt(0.0));
+  g->k_m = s["k_m"].number(gt(0.0));
+  g->k_cs = s["k_cs"].number(gt(0.0));
+  g->j_wg = s["j_wg"].number(gt(0.0));
+  g->j_fs = s["j_fs"].number(gt(0.0));
+  g->j_cs = s["j_cs"].number(gt(0.0));
+  g->zeta = s["zeta"].number(in(0.0, 10.0));
+}
+
+void load_friction_common(const Field &f, urt_friction_params_t *fr) {
+  Map s = f.map({"enabled", "sigma0", "sigma1", "qd_s", "k_static"});
+  fr->enabled = s["enabled"].boolean() ? 1 : 0;
+  fr->sigma0 = s["sigma0"].number(gt(0.0));
+  fr->sigma1 = s["sigma1"].number(ge(0.0));
+  fr->qd_s = s["qd_s"].number(gt(0.0));
+  fr->k_static = s["k_static"].number(ge(0.0));
+}
+
+// The sensor section as written; per-joint quanta follow from i_max and dt.
+struct SensorConfig {
+  urt_sensors_params_t common;  // everything but lsb_i
+  double adc_range;             // full scale ±adc_range·i_max   [-]
+  uint64_t adc_bits;            // ADC resolution                [bit]
+};
+
+void load_sensors(const Field &f, double dt, SensorConfig *sc) {
+  Map s = f.map({"noise", "quantise", "current", "motor_encoder", "joint_encoder"});
+  urt_sensors_params_t *p = &sc->common;
+  p->noise = s["noise"].boolean() ? 1 : 0;
+  p->quantise = s["quantise"].boolean() ? 1 : 0;
+
+  Map c = s["current"].map({"f", "sigma", "adc_bits", "adc_range"});
+  p->f_i = c["f"].number(gt(0.0));
+  p->sigma_i = c["sigma"].number(ge(0.0));
+  sc->adc_bits = c["adc_bits"].integer(1, 32);
+  sc->adc_range = c["adc_range"].number(in(1.0, 100.0));
+
+  // one encoder count per step is the smallest speed a position difference can show
+  Map w = s["motor_encoder"].map({"f", "zeta", "sigma", "counts_per_rev"});
+  p->f_w = w["f"].number(gt(0.0));
+  p->zeta_w = w["zeta"].number(in_lo_open(0.0, 10.0));
+  p->sigma_w = w["sigma"].number(ge(0.0));
+  p->lsb_w = 2.0 * kPi / static_cast<double>(w["counts_per_rev"].integer(2, 1ULL << 40)) / dt;
+
+  Map q = s["joint_encoder"].map({"f", "zeta", "sigma", "counts_per_rev"});
+  p->f_q = q["f"].number(gt(0.0));
+  p->zeta_q = q["zeta"].number(in_lo_open(0.0, 10.0));
+  p->sigma_q = q["sigma"].number(ge(0.0));
+  p->lsb_q = 2.0 * kPi / static_cast<double>(q["counts_per_rev"].integer(2, 1ULL << 40));
+}
+
+void load_joints(const Field &f, const urt_harmonic_drive_params_t gear[2],
+                 const urt_friction_params_t &fric, const SensorConfig &sc, double v_net,
+                 urt_model_t *m) {
+  std::vector<Field> joints = f.list(URT_NJ);
+  for (size_t j = 0; j < URT_NJ; j++) {
+    Map s = joints[j].map({"name", "size", "q_min", "q_max", "qd_max", "qdd_max", "torque_max",
+                           "q0", "control", "motor", "friction"});
+    urt_joint_params_t *jp = &m->joint[j];
+
+    // identity and drive size
+    std::string name = s["name"].name(sizeof jp->name - 1);
+    std::snprintf(jp->name, sizeof jp->name, "%s", name.c_str());
+    std::string size = s["size"].choice({"A", "B"});
+    jp->size = size[0];
+    m->gear[j] = gear[size == "A" ? 0 : 1];
+
+    // limits and the initial pose inside them
+    Range q_range{-4 * kPi, 4 * kPi, false, false, "in [-4 pi, 4 pi] rad"};
+    jp->q_min = s["q_min"].number(q_range);
+    jp->q_max = s["q_max"].number(q_range);
+    if (jp->q_max <= jp->q_min) {
+      s["q_max"].fail("must be > q_min (" + fmt_g(jp->q_min) + ")");
+    }
+    jp->qd_max = s["qd_max"].number(in_lo_open(0.0, 100.0));
+    jp->qdd_max = s["qdd_max"].number(in_lo_open(0.0, 10000.0));
+    jp->torque_max = s["torque_max"].number(gt(0.0));
+    m->q0[j] = s["q0"].number(any_finite());
+    if (m->q0[j] < jp->q_min || m->q0[j] > jp->q_max) {
+      s["q0"].fail("must be in [q_min, q_max] = [" + fmt_g(jp->q_min) + ", " +
+                   fmt_g(jp->q_max) + "]");
+    }
+
+    // controller gains (all > 0: urt_data_init divides by the integral gains)
+    Map c = s["control"].map({"p_pos", "p_vel", "i_vel", "p_cur", "i_cur"});
+    urt_pi_cascade_params_t *cp = &m->control[j];
+    cp->p_pos = c["p_pos"].number(gt(0.0));
+    cp->p_vel = c["p_vel"].number(gt(0.0));
+    cp->i_vel = c["i_vel"].number(gt(0.0));
+    cp->p_cur = c["p_cur"].number(gt(0.0));
+    cp->i_cur = c["i_cur"].number(gt(0.0));
+
+    Map mo = s["motor"].map({"j", "r", "l", "kt"});
+    urt_motor_params_t *mp = &m->motor[j];
+    mp->j = mo["j"].number(gt(0.0));
+    mp->r = mo["r"].number(gt(0.0));
+    mp->l = mo["l"].number(gt(0.0));
+    mp->kt = mo["kt"].number(gt(0.0));
+    mp->ke = mp->kt;  // k_e = k_t [paper §2.2]
+
+    // the simple derived limits: supply voltage and i_max = T_max/(k_t τ) [model.md §1.2]
+    double ratio = m->gear[j].z_cs / (m->gear[j].z_cs - m->gear[j].z_fs);
+    cp->v_net = v_net;
+    cp->i_max = jp->torque_max / (mp->kt * ratio);
+
+    // friction: the common LuGre part plus this joint's levels; g(0) = f_c (1 + K_s) > 0
+    Map fr = s["friction"].map({"f_c", "f_v", "k_q"});
+    urt_friction_params_t *fp = &m->friction[j];
+    *fp = fric;
+    fp->f_c = fr["f_c"].number(gt(0.0));
+    fp->f_v = fr["f_v"].number(ge(0.0));
+    fp->k_q = fr["k_q"].number(ge(0.0));
+
+    // sensors: common settings, ADC quantum from this joint's i_max
+    m->sensors[j] = sc.common;
+    m->sensors[j].lsb_i =
+        2.0 * sc.adc_range * cp->i_max / std::ldexp(1.0, static_cast<int>(sc.adc_bits));
+  }
+}
+
+void load_model(const Origin &origin, const YAML::Node &root, urt_model_t *m) {
+  int root_line = root.Mark().line >= 0 ? root.Mark().line + 1 : 1;
+  Field doc(&origin, root, "", root_line);
+  Map top = doc.map({"name", "simulation", "supply", "arm", "gear_sizes", "friction_common",
+                     "sensors", "joints"});
+
+  std::string name = top["name"].name(sizeof m->name - 1);
+  std::snprintf(m->name, sizeof m->name, "%s", name.c_str());
+  load_simulation(top["simulation"], m);
+
+  Map supply = top["supply"].map({"v_net"});
+  double v_net = supply["v_net"].number(in_lo_open(0.0, 1000.0));
+
+  load_arm(top["arm"], &m->arm);
+
+  Map sizes = top["gear_sizes"].map({"A", "B"});
+  urt_harmonic_drive_params_t gear[2] = {};
+  load_gear(sizes["A"], &gear[0]);
+  load_gear(sizes["B"], &gear[1]);
+
+  urt_friction_params_t fric = {};
+  load_friction_common(top["friction_common"], &fric);
+
+  SensorConfig sc = {};
+  load_sensors(top["sensors"], m->dt, &sc);
+
+  load_joints(top["joints"], gear, fric, sc, v_net, m);
+}
+
+// The whole file, or URT_EIO with the system's reason.
+std::string read_file(const char *path) {
+  errno = 0;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    int e = errno;
+    throw LoadError{URT_EIO, std::string(path) + ": cannot open: " +
+                                 (e ? std::strerror(e) : "unknown error")};
+  }
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) {
+    throw LoadError{URT_EIO, std::string(path) + ": cannot read"};
+  }
+  return ss.str();
+}
+
+// Parse, override, validate and fill. Returns the filled (not yet prepared) model.
+urt_model_t *load(const char *path, const char *const *overrides) {
+  std::string text = read_file(path);
+  Origin origin(path);
+
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException &e) {
+    throw LoadError{URT_ECONFIG, origin.file() + ":" + std::to_string(e.mark.line + 1) +
+                                    ": syntax error: " + e.msg};
+  }
+
+  for (const char *const *o = overrides; o && *o; o++) {
+    apply_override(&origin, root, *o);
+  }
+
+  // calloc, not new: urt_model_free (C) releases it with free()
+  urt_model_t *m = static_cast<urt_model_t *>(std::calloc(1, sizeof *m));
+  if (!m) {
+    throw std::bad_alloc();
+  }
+  try {
+    load_model(origin, root, m);
+  } catch (...) {
+    std::free(m);
+    throw;
+  }
+  std::snprintf(m->source, sizeof m->source, "%s", path);
+  return m;
+}
+
+void set_err(char *err, size_t err_sz, const std::string &msg) {
+  if (err && err_sz > 0) {
+    std::snprintf(err, err_sz, "%s", msg.c_str());
+  }
+}
+
+}  // namespace
+}  // namespace urt::core
+
+//---- C API ----
+
+extern "C" int urt_model_load(const char *path, const char *const *overrides, urt_model_t **out,
+                              char *err, size_t err_sz) {
+  using urt::core::LoadError;
+  using urt::core::set_err;
+
+  if (!path || !out) {
+    set_err(err, err_sz, "urt_model_load: path and out must not be NULL");
+    return URT_EINVAL;
+  }
+  urt_model_t *m = nullptr;
+  try {
+    m = urt::core::load(path, overrides);
+  } catch (const LoadError &e) {
+    set_err(err, err_sz, e.msg);
+    return e.code;
+  } catch (const std::bad_alloc &) {
+    set_err(err, err_sz, std::string(path) + ": out of memory");
+    return URT_ENOMEM;
+  } catch (const std::exception &e) {
+    set_err(err, err_sz, std::string(path) + ": " + e.what());
+    return URT_ECONFIG;
+  } catch (...) {
+    set_err(err, err_sz, std::string(path) + ": unexpected error");
+    return URT_ECONFIG;
+  }
+
+  // derived values and integrator tables (core/model_prepare.cpp)
+  int rc = urt_model_prepare(m);
+  if (rc != 0) {
+    set_err(err, err_sz, std::string(path) + ": model preparation failed: " + urt_strerror(rc));
+    urt_model_free(m);
+    return rc;
+  }
+  *out = m;
+  return 0;
+}

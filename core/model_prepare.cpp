@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: Apache-2.0
+// core/model_prepare.cpp — derived parameters and the integrator's tables, computed once
+// after loading; and the model's destructor.
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <new>
+
+#include "arm.hpp"
+#include "integrator.hpp"
+#include "urt/core.h"
+
+namespace urt::core {
+namespace {
+
+using MatD = Eigen::Matrix<double, URT_NXD, URT_NXD>;
+using VecD = Eigen::Matrix<double, URT_NXD, 1>;
+
+// Most negative slope of the friction law g(q̇): the Stribeck dip is a genuine instability of
+// growth rate |g'|/J_out that the step size must respect (model.md §5.3d–e).
+double friction_slope_min(const urt_friction_params_t* fp) {
+  double worst = 0.0;
+  for (int k = 0; k <= 400; k++) {
+    double v = 1e-6 * std::pow(10.0, 7.0 * k / 400.0);  // 1e-6 … 10 rad/s
+    worst = std::fmin(worst, urt_friction_dg(fp, v));
+  }
+  return worst;
+}
+
+// Smallest arm inertia a joint sees, over a few configurations (wrist inertias barely vary).
+double output_inertia_min(const urt_model_t* m, int j) {
+  double lo = INFINITY;
+  for (int k = 0; k < 64; k++) {
+    Eigen::Matrix<double, 6, 1> q;
+    for (int i = 0; i < URT_NJ; i++) {
+      q[i] = std::sin(1.7 * k + 2.3 * i) * M_PI;  // deterministic spread over the range
+    }
+    Eigen::Matrix<double, 6, 6> mass;
+    crba(m->arm, q, mass);
+    lo = std::fmin(lo, mass(j, j));
+  }
+  return lo + m->gear[j].j_cs;
+}
+
+// Columns of the drive block's affine rates: f(e_k) − f(0) at a forced active set is exact.
+void drive_columns(const urt_model_t* m, int j, int set, MatD& a, VecD& b_q, VecD& b_qd,
+                   VecD& f_qset, VecD& f_qdset) {
+  double x[URT_NXJ] = {0}, f0[URT_NXJ], f1[URT_NXJ];
+  JointInput in = {0, 0, 0, 0, 0, 0, 1};
+  JointAux aux;
+  drive_rhs(m, j, x, in, set, f0, &aux);
+  auto column = [&](VecD& col) {
+    drive_rhs(m, j, x, in, set, f1, &aux);
+    for (int i = 0; i < URT_NXD; i++) {
+      col[i] = f1[i] - f0[i];
+    }
+  };
+  for (int k = 0; k < URT_NXD; k++) {
+    x[k] = 1.0;
+    VecD col;
+    column(col);
+    a.col(k) = col;
+    x[k] = 0.0;
+  }
+  x[URT_X_Q] = 1.0;
+  column(b_q);
+  x[URT_X_Q] = 0.0;
+  x[URT_X_QD] = 1.0;
+  column(b_qd);
+  x[URT_X_QD] = 0.0;
+  in.q_set = 1.0;
+  column(f_qset);
+  in.q_set = 0.0;
+  in.qd_set = 1.0;
+  column(f_qdset);
+}
+
+}  // namespace
+
+int integrator_prepare(const urt_model_t* m, urt_integrator_tables* tab) noexcept {
+  // which joints need sub-steps, and how many
+  tab->h[kMacro] = m->dt;
+  tab->n_sub = (int)std::ceil(m->dt / m->substep_h_max - 1e-9);
+  if (tab->n_sub < 1) {
+    tab->n_sub = 1;
+  }
+  tab->h[kSub] = m->dt / tab->n_sub;
+  for (int j = 0; j < URT_NJ; j++) {
+    tab->g_slope_min[j] = friction_slope_min(&m->friction[j]);
+    tab->j_out[j] = output_inertia_min(m, j);
+    double ratio = m->dt * std::fabs(tab->g_slope_min[j]) / tab->j_out[j];
+    tab->substepped[j] = m->friction[j].enabled && tab->n_sub > 1 && ratio > m->substep_ratio;
+  }
+
+  // W_d⁻¹ and couplings for every joint, step kind and active set
+  for (int j = 0; j < URT_NJ; j++) {
+    for (int kind = 0; kind < kNumStepKinds; kind++) {
+      double gh = kGamma * tab->h[kind];
+      for (int set = 0; set < kNumActiveSets; set++) {
+        MatD a;
+        VecD b_q, b_qd, f_qset, f_qdset;
+        drive_columns(m, j, set, a, b_q, b_qd, f_qset, f_qdset);
+        MatD w = MatD::Identity() - gh * a;
+        // rows span 1 … 1e5 in scale (gear springs over tiny masses), so judge the inverse by
+        // its residual rather than by a pivot threshold
+        Eigen::PartialPivLU<MatD> lu(w);
+        MatD winv = lu.inverse();
+        if (!((w * winv - MatD::Identity()).cwiseAbs().maxCoeff() < 1e-6)) {
+          return URT_ESOLVER;
+        }
+        VecD winv_bq = winv * b_q;
+        VecD bd = gh * (gh * winv_bq + winv * b_qd);
+        DriveTables& t = tab->t[j][kind][set];
+        Eigen::Map<Eigen::Matrix<double, URT_NXD, URT_NXD, Eigen::RowMajor>>(t.winv) = winv;
+        Eigen::Map<VecD>(t.winv_bq) = winv_bq;
+        Eigen::Map<VecD>(t.bd) = bd;
+        Eigen::Map<VecD>(t.fq_set) = f_qset;
+        Eigen::Map<VecD>(t.fqd_set) = f_qdset;
+        if (!winv.allFinite()) {
+          return URT_ESOLVER;
+        }
+      }
+    }
+  }
+  return URT_OK;
+}
+
+}  // namespace urt::core
+
+extern "C" int urt_model_prepare(urt_model_t* m) {
+  // derived drive parameters
+  for (int j = 0; j < URT_NJ; j++) {
+    urt_harmonic_drive_derive(&m->gear[j], m->motor[j].j);
+    if (m->motor[j].ke == 0.0) {
+      m->motor[j].ke = m->motor[j].kt;  // k_e = k_t in SI units (paper eq. 1)
+    }
+    m->control[j].i_max = m->joint[j].torque_max / (m->motor[j].kt * m->gear[j].ratio);
+  }
+  urt_arm_prepare(&m->arm);
+
+  // integrator tables (about 170 kB): allocated here, never in the step
+  if (!m->tables) {
+    m->tables = static_cast<urt_integrator_tables*>(std::calloc(1, sizeof(urt_integrator_tables)));
+    if (!m->tables) {
+      return URT_ENOMEM;
+    }
+  }
+  return urt::core::integrator_prepare(m, m->tables);
+}
+
+extern "C" void urt_model_free(urt_model_t* m) {
+  if (!m) {
+    return;
+  }
+  std::free(m->tables);
+  std::free(m);
+}

@@ -1,0 +1,161 @@
+// SPDX-License-Identifier: Apache-2.0
+// core/step.cpp — urt_step: guard the command, integrate one step, check the state, sample
+// the sensors and refresh the outputs. Also the full right-hand side for the reference.
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstring>
+
+#include "arm.hpp"
+#include "integrator.hpp"
+#include "joint.hpp"
+#include "step_internal.h"
+#include "urt/core.h"
+#include "urt/drivers/friction.h"
+
+
+namespace {
+
+bool state_finite(const urt_data_t* d) {
+  for (int j = 0; j < URT_NJ; j++) {
+    for (int i = 0; i < URT_NXJ; i++) {
+      if (!std::isfinite(d->x[j][i])) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+// The command describes a quadratic from the step's start; carry it to the next step's start
+// so that a caller writing commands at a slower rate gets a continuous set-point.
+void command_advance(urt_data_t* d, double h) {
+  urt_command_t& c = d->cmd;
+  for (int j = 0; j < URT_NJ; j++) {
+    c.q[j] += c.qd[j] * h + 0.5 * c.qdd[j] * h * h;
+    c.qd[j] += c.qdd[j] * h;
+  }
+}
+
+// Drive signals (torques, voltage, measurements) at the current state, without the TCP pose.
+void outputs_drive(const urt_model_t* m, urt_data_t* d) {
+  double f[URT_NXJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    urt::core::JointAux aux;
+    urt::core::drive_rhs(m, j, d->x[j], urt::core::joint_input(m, d, j, 0.0),
+                         urt::core::kNatural, f, &aux);
+    urt_friction_out_t fr =
+        urt_friction_eval(&m->friction[j], d->x[j][URT_X_QD], d->x[j][URT_X_Z]);
+    d->t_cs[j] = aux.t_cs;
+    d->t_in[j] = aux.t_in;
+    d->i_ref[j] = aux.i_ref;
+    d->v_sup[j] = aux.v_sup;
+    d->i_fb[j] = aux.i_fb;
+    d->qdm_fb[j] = aux.qdm_fb;
+    d->q_fb[j] = aux.q_fb;
+    d->t_f[j] = fr.t_f;
+  }
+}
+
+}  // namespace
+
+extern "C" void urt_sensors_sample(const urt_model_t* m, urt_data_t* d) {
+  for (int j = 0; j < URT_NJ; j++) {
+    const urt_sensors_params_t& sp = m->sensors[j];
+    const double* x = d->x[j];
+
+    // draw all three normals even with noise off, so that switching noise on or off does not
+    // shift the random sequence of the other channels
+    double n_i = urt_rng_normal(&d->rng), n_w = urt_rng_normal(&d->rng);
+    double n_q = urt_rng_normal(&d->rng);
+    d->eps_i[j] = urt_sensors_held_error(x[URT_X_I_F], sp.sigma_i, n_i, sp.lsb_i, sp.noise,
+                                         sp.quantise);
+    d->eps_w[j] = urt_sensors_held_error(x[URT_X_W], sp.sigma_w, n_w, sp.lsb_w, sp.noise,
+                                         sp.quantise);
+    d->eps_q[j] = urt_sensors_held_error(x[URT_X_P], sp.sigma_q, n_q, sp.lsb_q, sp.noise,
+                                         sp.quantise);
+  }
+}
+
+extern "C" void urt_data_update_outputs(const urt_model_t* m, urt_data_t* d) {
+  outputs_drive(m, d);
+  double q[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = d->x[j][URT_X_Q];
+  }
+  urt_arm_tcp_pose(m, q, d->tcp_pose);
+}
+
+extern "C" int urt_step(const urt_model_t* m, urt_data_t* d) {
+  // a command written straight into d->cmd gets the same scrutiny as urt_command_set
+  urt__command_check(m, d);
+
+  // integrate; keep the start state so that a failed step can be undone
+  double x0[URT_NJ][URT_NXJ];
+  std::memcpy(x0, d->x, sizeof x0);
+  urt::core::integrator_step(m, d);
+  if (!state_finite(d)) {
+    std::memcpy(d->x, x0, sizeof x0);
+    d->pstop |= URT_PSTOP_NONFINITE_STATE;
+    std::memset(&d->cmd, 0, sizeof d->cmd);
+    for (int j = 0; j < URT_NJ; j++) {
+      d->cmd.q[j] = d->x[j][URT_X_Q];
+    }
+    return URT_ESOLVER;
+  }
+
+  urt__step_finish(m, d, x0);
+  return URT_OK;
+}
+
+extern "C" void urt__step_finish(const urt_model_t* m, urt_data_t* d,
+                                 const double (*x0)[URT_NXJ]) {
+  const double h = m->dt;
+
+  // time, mean accelerations over the step, and the command carried to the new step
+  for (int j = 0; j < URT_NJ; j++) {
+    d->qdd[j] = (d->x[j][URT_X_QD] - x0[j][URT_X_QD]) / h;
+    d->qdd_prev[j] = d->qdd[j];
+  }
+  d->steps++;
+  d->t = (double)d->steps * h;
+  command_advance(d, h);
+
+  // sample and hold the sensors for the next step, then the outputs they show
+  urt_sensors_sample(m, d);
+  outputs_drive(m, d);
+}
+
+extern "C" void urt_rhs(const urt_model_t* m, const urt_data_t* d, double s, const double* x,
+                        double* xdot) {
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
+  Vec6 tau, q, qd, zero = Vec6::Zero(), bias;
+
+  // joints: drives and friction; the arm's external wrench enters as Jᵀ F at the current q
+  for (int j = 0; j < URT_NJ; j++) {
+    urt::core::JointAux aux;
+    const double* xj = x + j * URT_NXJ;
+    tau[j] = urt::core::joint_rates(m, d, j, s, xj, xdot + j * URT_NXJ, &aux);
+    q[j] = xj[URT_X_Q];
+    qd[j] = xj[URT_X_QD];
+  }
+  bool any = false;
+  for (int i = 0; i < 6; i++) {
+    any = any || d->wrench_ext[i] != 0.0;
+  }
+  if (any) {
+    double jac[36];
+    urt_arm_jacobian(m, q.data(), jac);
+    Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> J(jac);
+    Eigen::Map<const Vec6> w(d->wrench_ext);
+    tau += J.transpose() * w;
+  }
+
+  // arm: the whole coupled 6-DoF forward dynamics, no splitting
+  Eigen::Matrix<double, 6, 6> mass;
+  urt::core::crba(m->arm, q, mass);
+  urt::core::rnea(m->arm, q, qd, zero, bias);
+  Vec6 qdd = mass.llt().solve(tau - bias);
+  for (int j = 0; j < URT_NJ; j++) {
+    xdot[j * URT_NXJ + URT_X_QD] = qdd[j];
+  }
+}

@@ -1,0 +1,23 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * core/step_internal.h — what urt_step and the CVODE reference share around the integration
+ * itself, so both treat commands, time, sensors and outputs identically. Internal. */
+#ifndef URT_CORE_STEP_INTERNAL_H
+#define URT_CORE_STEP_INTERNAL_H
+
+#include "urt/core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Refuse a bad command in d->cmd: protective stop and hold. Returns 0 or URT_EPSTOP. */
+int urt__command_check(const urt_model_t *m, urt_data_t *d);
+
+/* After the state has advanced by m->dt from x0: accelerations, time, the command carried
+ * forward, sensors sampled and outputs refreshed. Context: RT. */
+void urt__step_finish(const urt_model_t *m, urt_data_t *d, const double (*x0)[URT_NXJ]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

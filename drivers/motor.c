@@ -1,0 +1,11 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * drivers/motor.c — DC-equivalent PMSM, paper eq. (1). Equations in the header. */
+#include "urt/drivers/motor.h"
+
+urt_motor_deriv_t urt_motor_deriv(const urt_motor_params_t *p, double i, double qd_m,
+                                  double v_sup, double t_in) {
+  urt_motor_deriv_t out;
+  out.di = (v_sup - p->r * i - p->ke * qd_m) / p->l;
+  out.dqd = (p->kt * i - t_in) / p->j;
+  return out;
+}

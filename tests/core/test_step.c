@@ -1,0 +1,252 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * tests/core/test_step.c — core/step.cpp, core/integrator.cpp, core/command.c */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_model.h"
+#include "test_support.h"
+
+// A smooth motion on every joint: q0 + A sin(ω t), with consistent speed and acceleration.
+static void sine_command(const urt_model_t *m, double t, urt_command_t *c) {
+  memset(c, 0, sizeof *c);
+  for (int j = 0; j < URT_NJ; j++) {
+    double a = 0.3, w = 2.0 + 0.5 * j;
+    c->q[j] = m->q0[j] + a * sin(w * t);
+    c->qd[j] = a * w * cos(w * t);
+    c->qdd[j] = -a * w * w * sin(w * t);
+  }
+}
+
+static urt_data_t *new_data(const urt_model_t *m) {
+  urt_data_t *d = calloc(1, sizeof *d);
+  assert_non_null(d);
+  assert_int_equal(urt_data_init(m, d, NULL), 0);
+  return d;
+}
+
+static int state_finite(const urt_data_t *d) {
+  for (int j = 0; j < URT_NJ; j++) {
+    for (int i = 0; i < URT_NXJ; i++) {
+      if (!isfinite(d->x[j][i])) {
+        return 0;
+      }
+    }
+  }
+  return 1;
+}
+
+static void test_step__makes_no_heap_allocations(void **state) {
+  (void)state;
+  urt_model_t *m = urt_test_model(NULL);
+  urt_data_t *d = new_data(m);
+  urt_command_t c;
+  long before = urt_test_malloc_count();
+  urt_test_malloc_arm(1);
+  for (int k = 0; k < 10000; k++) {
+    sine_command(m, d->t, &c);
+    urt_command_set(m, d, &c);
+    urt_step(m, d);
+  }
+  urt_test_malloc_arm(0);
+  long calls = urt_test_malloc_count() - before;
+  print_message("heap calls during 10000 steps: %ld\n", calls);
+  assert_int_equal(calls, 0);
+  assert_int_equal(d->pstop, 0);
+  free(d);
+  urt_model_free(m);
+}
+
+static void expect_refused(const urt_model_t *m, urt_data_t *d, const urt_command_t *c,
+                           uint32_t bit) {
+  assert_int_equal(urt_command_set(m, d, c), URT_EPSTOP);
+  assert_true(d->pstop & bit);
+  for (int k = 0; k < 200; k++) {
+    urt_step(m, d);
+  }
+  assert_true(state_finite(d));
+  for (int j = 0; j < URT_NJ; j++) {
+    assert_true(isfinite(d->cmd.q[j]));
+    assert_near(d->x[j][URT_X_Q], m->q0[j], 1e-3);  // held where it was
+  }
+  urt_pstop_reset(m, d);
+  assert_int_equal(d->pstop, 0);
+}
+
+static void test_command_set__refuses_nan_inf_and_out_of_range_with_protective_stop(
+    void **state) {
+  (void)state;
+  urt_model_t *m = urt_test_model(NULL);
+  urt_data_t *d = new_data(m);
+  urt_command_t c;
+
+  sine_command(m, 0.0, &c);
+  c.q[2] = NAN;
+  expect_refused(m, d, &c, URT_PSTOP_NONFINITE_CMD);
+
+  sine_command(m, 0.0, &c);
+  c.qd[4] = INFINITY;
+  expect_refused(m, d, &c, URT_PSTOP_NONFINITE_CMD);
+
+  sine_command(m, 0.0, &c);
+  c.q[0] = m->joint[0].q_max + 0.1;
+  expect_refused(m, d, &c, URT_PSTOP_POS_LIMIT);
+
+  sine_command(m, 0.0, &c);
+  c.qd[1] = 2.0 * m->joint[1].qd_max;
+  expect_refused(m, d, &c, URT_PSTOP_SPEED_LIMIT);
+
+  sine_command(m, 0.0, &c);
+  c.tau_ff[5] = -1e6;
+  expect_refused(m, d, &c, URT_PSTOP_TORQUE_LIMIT);
+
+  // a command is refused while the stop holds
+  sine_command(m, 0.0, &c);
+  c.q[0] = NAN;
+  urt_command_set(m, d, &c);
+  sine_command(m, 0.0, &c);
+  assert_int_equal(urt_command_set(m, d, &c), URT_EPSTOP);
+  free(d);
+  urt_model_free(m);
+}
+
+static void test_step__refuses_nan_written_straight_into_the_command(void **state) {
+  (void)state;
+  urt_model_t *m = urt_test_model(NULL);
+  urt_data_t *d = new_data(m);
+  d->cmd.qdd[3] = NAN;
+  urt_step(m, d);
+  assert_true(d->pstop & URT_PSTOP_NONFINITE_CMD);
+  assert_true(state_finite(d));
+  free(d);
+  urt_model_free(m);
+}
+
+static void run_noisy(const urt_model_t *m, urt_data_t *d, int n) {
+  urt_command_t c;
+  for (int k = 0; k < n; k++) {
+    sine_command(m, d->t, &c);
+    urt_command_set(m, d, &c);
+    urt_step(m, d);
+  }
+}
+
+static void test_step__same_seed_is_bit_identical_and_another_seed_is_not(void **state) {
+  (void)state;
+  urt_model_t *m = urt_test_model(NULL);
+  const char *const seed2[] = {"simulation.seed=2", NULL};
+  urt_model_t *m2 = urt_test_model(seed2);
+  urt_data_t *a = new_data(m), *b = new_data(m), *c = new_data(m2);
+  run_noisy(m, a, 4000);
+  run_noisy(m, b, 4000);
+  run_noisy(m2, c, 4000);
+  assert_memory_equal(a->x, b->x, sizeof a->x);
+  assert_memory_equal(a->i_fb, b->i_fb, sizeof a->i_fb);
+  assert_true(memcmp(a->x, c->x, sizeof a->x) != 0);
+  free(a);
+  free(b);
+  free(c);
+  urt_model_free(m);
+  urt_model_free(m2);
+}
+
+static void test_step__settled_current_equals_gravity_over_kt_ratio_without_friction(
+    void **state) {
+  (void)state;
+  const char *const ov[] = {"sensors.noise=false", "sensors.quantise=false",
+                            "friction_common.enabled=false", NULL};
+  urt_model_t *m = urt_test_model(ov);
+  urt_data_t *d = new_data(m);
+  const double poses[5][URT_NJ] = {{0.0, -1.2, 1.0, -1.4, -1.5708, 0.0},
+                                   {0.5, -0.3, 0.4, -0.8, 1.0, 0.5},
+                                   {-0.7, -2.0, 2.2, 0.3, -0.5, 1.0},
+                                   {1.2, -0.8, -1.0, -2.0, 0.7, -1.0},
+                                   {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}};
+  double worst = 0.0;
+  for (int p = 0; p < 5; p++) {
+    // a 1 s cosine blend from where the arm is to the pose, then 0.5 s to settle
+    double from[URT_NJ];
+    for (int j = 0; j < URT_NJ; j++) {
+      from[j] = d->x[j][URT_X_Q];
+    }
+    int n_move = (int)lround(1.0 / m->dt), n_hold = (int)lround(0.5 / m->dt);
+    for (int k = 0; k < n_move + n_hold; k++) {
+      urt_command_t c;
+      memset(&c, 0, sizeof c);
+      double s = fmin(k * m->dt, 1.0);
+      for (int j = 0; j < URT_NJ; j++) {
+        double dq = poses[p][j] - from[j];
+        c.q[j] = from[j] + dq * 0.5 * (1.0 - cos(M_PI * s));
+        c.qd[j] = k < n_move ? dq * 0.5 * M_PI * sin(M_PI * s) : 0.0;
+        c.qdd[j] = k < n_move ? dq * 0.5 * M_PI * M_PI * cos(M_PI * s) : 0.0;
+      }
+      assert_int_equal(urt_command_set(m, d, &c), 0);
+      assert_int_equal(urt_step(m, d), 0);
+    }
+
+    // compare with g(q) / (k_t τ): every joint whose holding current is not negligible
+    double q[URT_NJ], g[URT_NJ];
+    for (int j = 0; j < URT_NJ; j++) {
+      q[j] = d->x[j][URT_X_Q];
+    }
+    urt_arm_gravity(m, q, g);
+    for (int j = 0; j < URT_NJ; j++) {
+      double expect = g[j] / (m->motor[j].kt * m->gear[j].ratio);
+      double got = d->x[j][URT_X_I];
+      double tol = fmax(0.01 * fabs(expect), 1e-4 * m->control[j].i_max);
+      print_message("pose %d joint %d: i = %+.6f A, g/(kt tau) = %+.6f A, rel %.2e\n", p, j + 1,
+                    got, expect, fabs(expect) > 1e-9 ? fabs(got / expect - 1.0) : 0.0);
+      if (fabs(expect) > 0.01) {
+        worst = fmax(worst, fabs(got / expect - 1.0));
+      }
+      assert_near(got, expect, tol);
+    }
+  }
+  print_message("worst relative error over joints with |i| > 10 mA: %.3g\n", worst);
+  free(d);
+  urt_model_free(m);
+}
+
+static void test_step__released_arm_conserves_energy_for_10_s(void **state) {
+  (void)state;
+  const char *const ov[] = {"simulation.drives_engaged=false", "friction_common.enabled=false",
+                            NULL};
+  urt_model_t *m = urt_test_model(ov);
+  urt_data_t *d = calloc(1, sizeof *d);
+  const double q0[URT_NJ] = {0.2, -0.7, 0.3, -0.5, 0.8, 0.1};
+  assert_int_equal(urt_data_init(m, d, q0), 0);
+  double qd[URT_NJ] = {0}, q[URT_NJ];
+  double e0 = urt_arm_energy(m, q0, qd), worst = 0.0, ke_max = 0.0;
+  int n = (int)lround(10.0 / m->dt);
+  for (int k = 0; k < n; k++) {
+    assert_int_equal(urt_step(m, d), 0);
+    if (k % 20 == 0 || k == n - 1) {
+      for (int j = 0; j < URT_NJ; j++) {
+        q[j] = d->x[j][URT_X_Q];
+        qd[j] = d->x[j][URT_X_QD];
+      }
+      double e = urt_arm_energy(m, q, qd);
+      double zero[URT_NJ] = {0};
+      ke_max = fmax(ke_max, e - urt_arm_energy(m, q, zero));
+      worst = fmax(worst, fabs(e - e0));
+    }
+  }
+  print_message("E0 = %.6f J, max kinetic %.3f J, max |E - E0| = %.3g J (%.3g relative)\n", e0,
+                ke_max, worst, worst / fabs(e0));
+  assert_true(ke_max > 1.0);  // the arm really swung
+  assert_true(worst <= 1e-4 * fabs(e0));
+  free(d);
+  urt_model_free(m);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_step__makes_no_heap_allocations),
+      cmocka_unit_test(test_command_set__refuses_nan_inf_and_out_of_range_with_protective_stop),
+      cmocka_unit_test(test_step__refuses_nan_written_straight_into_the_command),
+      cmocka_unit_test(test_step__same_seed_is_bit_identical_and_another_seed_is_not),
+      cmocka_unit_test(test_step__settled_current_equals_gravity_over_kt_ratio_without_friction),
+      cmocka_unit_test(test_step__released_arm_conserves_energy_for_10_s),
+  };
+  return cmocka_run_group_tests_name("core/step", tests, NULL, NULL);
+}

@@ -1,0 +1,67 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * tests/drivers/test_friction.c — drivers/friction.c */
+#include <math.h>
+
+#include "test_support.h"
+#include "urt/drivers/friction.h"
+
+static const urt_friction_params_t kWrist = {1, 5e6, 100, 0.5, 0.3, 2.0, 2.0, 10.0};
+
+static void test_friction_g__is_even_and_finite_for_negative_speed(void **state) {
+  (void)state;
+  for (double v = 1e-4; v < 4.0; v *= 1.7) {
+    assert_true(isfinite(urt_friction_g(&kWrist, -v)));
+    assert_near(urt_friction_g(&kWrist, v), urt_friction_g(&kWrist, -v), 0.0);
+  }
+  assert_near(urt_friction_g(&kWrist, 0.0), 2.0 * 1.3, 1e-12);  // static level f_c (1 + K_s)
+}
+
+static void test_friction__steady_sliding_gives_g_sign_v(void **state) {
+  (void)state;
+  double v = -0.7;
+  double z = -urt_friction_g(&kWrist, v) / kWrist.sigma0;  // ż = 0
+  urt_friction_out_t o = urt_friction_eval(&kWrist, v, z);
+  assert_near(o.dz, 0.0, 1e-12);
+  assert_near(o.t_f, -urt_friction_g(&kWrist, v), 1e-9);
+}
+
+static void test_friction__partials_match_finite_differences(void **state) {
+  (void)state;
+  double v = 0.03, z = 1e-7, h = 1e-8;
+  urt_friction_out_t o = urt_friction_eval(&kWrist, v, z);
+  double dz_dv = (urt_friction_eval(&kWrist, v + h, z).dz -
+                  urt_friction_eval(&kWrist, v - h, z).dz) / (2 * h);
+  double dz_dz = (urt_friction_eval(&kWrist, v, z + 1e-12).dz -
+                  urt_friction_eval(&kWrist, v, z - 1e-12).dz) / 2e-12;
+  assert_near(o.ddz_dqd, dz_dv, 1e-5 * fabs(dz_dv) + 1e-9);
+  assert_near(o.ddz_dz, dz_dz, 1e-4 * fabs(dz_dz));
+}
+
+static void test_friction_dg__stribeck_dip_is_about_minus_3_7(void **state) {
+  (void)state;
+  double worst = 0.0;
+  for (double v = 1e-5; v < 1.0; v *= 1.01) {
+    worst = fmin(worst, urt_friction_dg(&kWrist, v));
+  }
+  assert_near(worst, -3.7, 0.2);  // model.md §2.2
+}
+
+static void test_friction__disabled_is_zero(void **state) {
+  (void)state;
+  urt_friction_params_t p = kWrist;
+  p.enabled = 0;
+  urt_friction_out_t o = urt_friction_eval(&p, 1.0, 1e-6);
+  assert_near(o.t_f, 0.0, 0.0);
+  assert_near(o.dz, 0.0, 0.0);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_friction_g__is_even_and_finite_for_negative_speed),
+      cmocka_unit_test(test_friction__steady_sliding_gives_g_sign_v),
+      cmocka_unit_test(test_friction__partials_match_finite_differences),
+      cmocka_unit_test(test_friction_dg__stribeck_dip_is_about_minus_3_7),
+      cmocka_unit_test(test_friction__disabled_is_zero),
+  };
+  return cmocka_run_group_tests_name("drivers/friction", tests, NULL, NULL);
+}

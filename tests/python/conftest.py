@@ -1,0 +1,29 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Shared fixtures: the urtwin shared library, the UR5 model loaded through it, and the same
+model's resolved parameters from urt_config. Tests that need a missing build artefact skip."""
+
+import os
+
+import pytest
+
+import urtwin_ctypes as urt
+
+
+@pytest.fixture(scope="session")
+def urtwin_lib():
+    if not os.path.exists(urt.LIBURTWIN):
+        pytest.skip(f"{urt.LIBURTWIN} is not built (set URT_BUILD to the cmake build dir)")
+    return urt.load_library()
+
+
+@pytest.fixture(scope="session")
+def ur5(urtwin_lib):
+    with urt.Model(urtwin_lib, urt.UR5_YAML) as m:
+        yield m
+
+
+@pytest.fixture(scope="session")
+def ur5_params():
+    if not os.access(urt.URT_CONFIG, os.X_OK):
+        pytest.skip(f"{urt.URT_CONFIG} is not built")
+    return urt.resolved_model(urt.UR5_YAML)

@@ -1,0 +1,115 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Smoke test of the benchmark: urt_bench and tools/bench.py run and write complete JSON.
+
+Only structure and sanity (positive, finite, ordered percentiles) are checked — never a time:
+the machine is shared and noisy, so a timing threshold would only make the suite flaky.
+"""
+
+import glob
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+BUILD = Path(os.environ.get("URT_BUILD", ROOT / "build"))
+URT_BENCH = BUILD / "tools" / "urt_bench"
+STATS = ("median_us", "p99_us", "p999_us", "max_us", "mean_us", "min_us", "rtf",
+         "wall_s_per_sim_s")
+
+pytestmark = pytest.mark.skipif(not os.access(URT_BENCH, os.X_OK),
+                                reason=f"{URT_BENCH} is not built")
+
+
+def mujoco_lib():
+    try:
+        import mujoco
+    except ImportError:
+        return None
+    libs = glob.glob(os.path.join(os.path.dirname(mujoco.__file__), "libmujoco.so*"))
+    return max(libs, key=len) if libs else None
+
+
+def run_urt_bench(tmp_path, *extra):
+    out = tmp_path / "urt_bench.json"
+    cmd = [str(URT_BENCH), "--config", str(ROOT / "config" / "ur5.yaml"), "--steps", "2000",
+           "--warmup", "200", "--json", str(out), "--quiet", *extra]
+    proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=300)
+    assert out.is_file(), proc.stderr
+    return proc, json.loads(out.read_text())
+
+
+def check_stats(run, n):
+    assert run["status"] == "ok", run.get("error")
+    assert run["n"] == n
+    for key in STATS:
+        assert math.isfinite(run[key]) and run[key] > 0, key
+    # order statistics of one sample: holds whatever the machine is doing
+    assert run["min_us"] <= run["median_us"] <= run["p99_us"] <= run["p999_us"] <= run["max_us"]
+
+
+def test_urt_bench__writes_stats_for_both_rates_and_mujoco(tmp_path):
+    lib = mujoco_lib()
+    proc, res = run_urt_bench(tmp_path, *(["--mujoco-lib", lib] if lib else []))
+    assert proc.returncode == 0, proc.stderr
+
+    urt = res["urt"]
+    assert urt["status"] == "ok", urt.get("error")
+    assert sorted(r["dt"] for r in urt["runs"]) == [5e-5, 1e-4]
+    for run in urt["runs"]:
+        check_stats(run, 2000)
+        assert run["step_errors"] == 0 and run["pstop"] == 0
+
+    assert len(res["arm"]["links"]) == 6
+    assert res["clock"]["overhead_ns"] > 0
+
+    mj = res["mujoco"]
+    if lib is None:
+        assert mj["status"] == "unavailable"
+        return
+    assert mj["status"] == "ok", mj.get("error")
+    assert mj["version"]
+    assert {r["variant"] for r in mj["runs"]} >= {"euler"}
+    for run in mj["runs"]:
+        check_stats(run, 2000)
+    euler = [r for r in res["ratios"] if r["denominator"] == "mj_step median (euler)"]
+    assert len(euler) == 2 and all(r["value"] > 0 for r in euler)
+
+
+def test_urt_bench__reports_mujoco_unavailable_without_failing(tmp_path):
+    proc, res = run_urt_bench(tmp_path, "--steps", "100",
+                              "--mujoco-lib", "/nonexistent/libmujoco.so")
+    assert proc.returncode == 0, proc.stderr
+    assert res["mujoco"]["status"] == "unavailable"
+    assert "dlopen" in res["mujoco"]["error"]
+    assert res["mujoco"]["runs"] == []
+    assert res["urt"]["status"] == "ok"
+
+
+def test_bench_py__merges_everything_into_one_json(tmp_path):
+    out = tmp_path / "bench.json"
+    env = dict(os.environ, URT_BUILD=str(BUILD))
+    proc = subprocess.run([sys.executable, str(ROOT / "tools" / "bench.py"), "--quick",
+                           "--out", str(out)], capture_output=True, text=True, cwd=ROOT,
+                          env=env, timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    res = json.loads(out.read_text())
+
+    assert res["machine"]["cpu_model"] and res["machine"]["date_utc"]
+    assert res["urt_bench"]["urt"]["status"] == "ok"
+    assert res["urt_bench"]["mujoco"]["status"] in ("ok", "unavailable")
+    pin = res["pinocchio"]
+    assert pin["status"] in ("ok", "unavailable")
+    if pin["status"] == "ok":
+        assert pin["python_raw"]["median_us"] > 0
+        assert pin["python_binding_reference"]["median_us"] > 0
+        assert len(pin["gravity_torque_q0"]) == 6
+        if "median_us" in pin["native"]:
+            assert pin["native"]["median_us"] > 0
+            assert pin["native"]["max_rel_diff_vs_aba"] < 1e-9
+    assert res["ratios"] and all(r["value"] > 0 for r in res["ratios"])
+    assert "urt_step" in proc.stdout

@@ -1,0 +1,1215 @@
+// SPDX-License-Identifier: Apache-2.0
+// tools/urt_bench.cpp — cost of one urt_step, side by side with MuJoCo's mj_step on a UR5-like
+// model, measured in one run (model.md §5.6 target, style.md point 24).
+//
+//   urt_bench [--config config/ur5.yaml] [--set key=value]... [--steps N] [--warmup N]
+//             [--dt 5e-5,1e-4] [--mujoco-lib /path/libmujoco.so.X] [--json out.json]
+//
+// For every dt it loads the model with "<dt-key>=<dt>" added to the overrides, starts at rest,
+// drives a moving sine set-point on all joints and times each urt_step with CLOCK_MONOTONIC
+// into a preallocated array. All cases (urt at each dt, MuJoCo variants) are timed round robin
+// in chunks (--chunk), so load changes on the machine hit them alike. MuJoCo is dlopen'ed (the pip wheel ships libmujoco.so), so the
+// benchmark builds and runs without it; if it cannot be loaded the JSON and the table say
+// "unavailable". Only medians, percentiles and ratios are reported — never a pass/fail on time:
+// the machine is shared and noisy. Pinocchio's ABA is timed by tools/bench.py, which merges.
+#include <dlfcn.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <getopt.h>
+#include <sched.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "urt/core.h"
+
+namespace urt::tools {
+namespace {
+
+//---- options ----
+
+struct Options {
+  std::string config = "config/ur5.yaml";
+  std::vector<std::string> sets;            // user overrides, "key.path=value"
+  std::string dt_key = "simulation.dt";     // the override key the loader reads dt from
+  std::vector<double> dts = {5e-5, 1e-4};   // 20 kHz and 10 kHz
+  long steps = 20000;
+  long warmup = 2000;
+  long chunk = 500;                          // steps per case per round-robin turn
+  double speed = 0.9;                        // peak joint speed of the set-point [rad/s]
+  std::string mujoco_lib;
+  std::string json;
+  std::string mjcf_out;
+  int cpu = -1;
+  bool dma_latency = false;
+  bool skip_urt = false;
+  bool skip_mujoco = false;
+  bool quiet = false;
+};
+
+void usage(FILE *f) {
+  fprintf(f,
+          "usage: urt_bench [options]\n"
+          "  --config FILE        robot parameter file (default config/ur5.yaml)\n"
+          "  --set KEY=VALUE      override passed to urt_model_load (repeatable)\n"
+          "  --dt LIST            comma-separated steps in s (default 5e-5,1e-4)\n"
+          "  --dt-key KEY         override key for dt (default simulation.dt)\n"
+          "  --steps N            timed steps per case (default 20000)\n"
+          "  --warmup N           untimed steps before timing (default 2000)\n"
+          "  --chunk N            steps per case per round-robin turn (default 500)\n"
+          "  --speed V            peak joint speed of the set-point, rad/s (default 0.9)\n"
+          "  --mujoco-lib PATH    libmujoco.so to dlopen (without it MuJoCo is unavailable)\n"
+          "  --mjcf-out FILE      also write the UR5-like MJCF used for mj_step\n"
+          "  --json FILE          write the results as JSON\n"
+          "  --cpu N              pin the process to CPU N\n"
+          "  --dma-latency        hold /dev/cpu_dma_latency at 0 while running\n"
+          "  --skip-urt, --skip-mujoco, --quiet (no table)\n");
+}
+
+bool parse_dts(const char *s, std::vector<double> *out) {
+  out->clear();
+  std::string str(s);
+  size_t pos = 0;
+  while (pos <= str.size()) {
+    size_t end = str.find(',', pos);
+    if (end == std::string::npos) {
+      end = str.size();
+    }
+    std::string tok = str.substr(pos, end - pos);
+    char *e = nullptr;
+    double v = strtod(tok.c_str(), &e);
+    if (tok.empty() || *e != '\0' || !(v > 0.0) || !std::isfinite(v)) {
+      return false;
+    }
+    out->push_back(v);
+    pos = end + 1;
+  }
+  return !out->empty();
+}
+
+bool parse_long(const char *s, long min, long *out) {
+  char *e = nullptr;
+  long v = strtol(s, &e, 10);
+  if (*s == '\0' || *e != '\0' || v < min) {
+    return false;
+  }
+  *out = v;
+  return true;
+}
+
+// returns 0 on success, 1 to exit with success (help), 2 on a usage error
+int parse_options(int argc, char **argv, Options *o) {
+  enum { kDtKey = 256, kMjcfOut, kDma, kSkipUrt, kSkipMj, kQuiet, kSpeed, kChunk };
+  static const struct option longopts[] = {
+      {"config", required_argument, nullptr, 'c'},
+      {"set", required_argument, nullptr, 's'},
+      {"dt", required_argument, nullptr, 'd'},
+      {"dt-key", required_argument, nullptr, kDtKey},
+      {"steps", required_argument, nullptr, 'n'},
+      {"warmup", required_argument, nullptr, 'w'},
+      {"speed", required_argument, nullptr, kSpeed},
+      {"chunk", required_argument, nullptr, kChunk},
+      {"mujoco-lib", required_argument, nullptr, 'm'},
+      {"mjcf-out", required_argument, nullptr, kMjcfOut},
+      {"json", required_argument, nullptr, 'j'},
+      {"cpu", required_argument, nullptr, 'p'},
+      {"dma-latency", no_argument, nullptr, kDma},
+      {"skip-urt", no_argument, nullptr, kSkipUrt},
+      {"skip-mujoco", no_argument, nullptr, kSkipMj},
+      {"quiet", no_argument, nullptr, kQuiet},
+      {"help", no_argument, nullptr, 'h'},
+      {nullptr, 0, nullptr, 0}};
+  int c;
+  long v;
+  while ((c = getopt_long(argc, argv, "c:s:d:n:w:m:j:p:h", longopts, nullptr)) != -1) {
+    switch (c) {
+      case 'c': o->config = optarg; break;
+      case 's':
+        if (strchr(optarg, '=') == nullptr) {
+          fprintf(stderr, "urt_bench: --set expects KEY=VALUE, got '%s'\n", optarg);
+          return 2;
+        }
+        o->sets.emplace_back(optarg);
+        break;
+      case 'd':
+        if (!parse_dts(optarg, &o->dts)) {
+          fprintf(stderr, "urt_bench: bad --dt list '%s'\n", optarg);
+          return 2;
+        }
+        break;
+      case kDtKey: o->dt_key = optarg; break;
+      case 'n':
+        if (!parse_long(optarg, 1, &o->steps)) {
+          fprintf(stderr, "urt_bench: bad --steps '%s'\n", optarg);
+          return 2;
+        }
+        break;
+      case 'w':
+        if (!parse_long(optarg, 0, &o->warmup)) {
+          fprintf(stderr, "urt_bench: bad --warmup '%s'\n", optarg);
+          return 2;
+        }
+        break;
+      case kChunk:
+        if (!parse_long(optarg, 1, &o->chunk)) {
+          fprintf(stderr, "urt_bench: bad --chunk '%s'\n", optarg);
+          return 2;
+        }
+        break;
+      case kSpeed: {
+        char *e = nullptr;
+        o->speed = strtod(optarg, &e);
+        if (*e != '\0' || !(o->speed > 0.0 && o->speed <= 3.2)) {
+          fprintf(stderr, "urt_bench: bad --speed '%s' (0 < v <= 3.2 rad/s)\n", optarg);
+          return 2;
+        }
+        break;
+      }
+      case 'm': o->mujoco_lib = optarg; break;
+      case kMjcfOut: o->mjcf_out = optarg; break;
+      case 'j': o->json = optarg; break;
+      case 'p':
+        if (!parse_long(optarg, 0, &v)) {
+          fprintf(stderr, "urt_bench: bad --cpu '%s'\n", optarg);
+          return 2;
+        }
+        o->cpu = static_cast<int>(v);
+        break;
+      case kDma: o->dma_latency = true; break;
+      case kSkipUrt: o->skip_urt = true; break;
+      case kSkipMj: o->skip_mujoco = true; break;
+      case kQuiet: o->quiet = true; break;
+      case 'h': usage(stdout); return 1;
+      default: usage(stderr); return 2;
+    }
+  }
+  if (optind < argc) {
+    fprintf(stderr, "urt_bench: unexpected argument '%s'\n", argv[optind]);
+    return 2;
+  }
+  return 0;
+}
+
+//---- timing and statistics ----
+
+inline int64_t now_ns() {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
+}
+
+struct Stats {
+  long n = 0;
+  double min_us = 0, median_us = 0, mean_us = 0, p99_us = 0, p999_us = 0, max_us = 0;
+};
+
+// nearest-rank percentile of sorted data, p in (0, 1]
+double percentile(const std::vector<int64_t> &sorted, double p) {
+  size_t n = sorted.size();
+  size_t k = static_cast<size_t>(std::ceil(p * static_cast<double>(n)));
+  k = std::min(std::max<size_t>(k, 1), n);
+  return static_cast<double>(sorted[k - 1]);
+}
+
+Stats summarise(std::vector<int64_t> samples_ns) {
+  Stats s;
+  if (samples_ns.empty()) {
+    return s;
+  }
+  std::sort(samples_ns.begin(), samples_ns.end());
+  size_t n = samples_ns.size();
+  double sum = 0;
+  for (int64_t x : samples_ns) {
+    sum += static_cast<double>(x);
+  }
+  s.n = static_cast<long>(n);
+  s.min_us = samples_ns.front() * 1e-3;
+  s.max_us = samples_ns.back() * 1e-3;
+  s.mean_us = sum / static_cast<double>(n) * 1e-3;
+  s.median_us = (n % 2 ? static_cast<double>(samples_ns[n / 2])
+                       : 0.5 * static_cast<double>(samples_ns[n / 2 - 1] + samples_ns[n / 2])) *
+                1e-3;
+  s.p99_us = percentile(samples_ns, 0.99) * 1e-3;
+  s.p999_us = percentile(samples_ns, 0.999) * 1e-3;
+  return s;
+}
+
+// median cost of an empty timed region: what every sample carries on top of the work (reported,
+// not subtracted — it is ~20 ns on a vDSO clock, well below the noise of a shared machine)
+double clock_overhead_ns() {
+  std::vector<int64_t> v(20000);
+  for (auto &x : v) {
+    int64_t t0 = now_ns();
+    int64_t t1 = now_ns();
+    x = t1 - t0;
+  }
+  std::sort(v.begin(), v.end());
+  return static_cast<double>(v[v.size() / 2]);
+}
+
+//---- the moving set-point ----
+
+// Per joint j: q = q0 + s·A·(1 − cos ωt), so the arm starts at rest at q0 and reverses at every
+// half period (friction passes through stick–slip), with consistent q, q̇, q̈. Frequencies
+// differ per joint so the configuration — and M(q) — keeps changing.
+struct Setpoint {
+  double q0[URT_NJ], amp[URT_NJ], omega[URT_NJ];
+
+  void at(double t, double q[URT_NJ], double qd[URT_NJ], double qdd[URT_NJ]) const {
+    for (int j = 0; j < URT_NJ; ++j) {
+      double c = std::cos(omega[j] * t), s = std::sin(omega[j] * t);
+      q[j] = q0[j] + amp[j] * (1.0 - c);
+      qd[j] = amp[j] * omega[j] * s;
+      qdd[j] = amp[j] * omega[j] * omega[j] * c;
+    }
+  }
+};
+
+// amp carries the direction (sign) that keeps q0 + 2A inside the limits with a margin.
+Setpoint make_setpoint(const double q0[URT_NJ], const double q_min[URT_NJ],
+                       const double q_max[URT_NJ], const double qd_max[URT_NJ],
+                       const double qdd_max[URT_NJ], double speed) {
+  const double kMargin = 0.05;  // rad kept from each limit
+  Setpoint sp;
+  for (int j = 0; j < URT_NJ; ++j) {
+    double w = 2.0 * M_PI * (0.25 + 0.05 * j);
+    // a limit of 0 (not set in the file) means "no limit", not "do not move"
+    double v = qd_max[j] > 0 ? std::min(speed, 0.9 * qd_max[j]) : speed;
+    double a = v / w;
+    if (qdd_max[j] > 0) {
+      a = std::min(a, 0.9 * qdd_max[j] / (w * w));
+    }
+    double room_up = (q_max[j] - kMargin - q0[j]) / 2.0;
+    double room_down = (q0[j] - q_min[j] - kMargin) / 2.0;
+    if (a <= room_up) {
+      sp.amp[j] = a;
+    } else if (a <= room_down) {
+      sp.amp[j] = -a;
+    } else {
+      sp.amp[j] = room_up >= room_down ? std::max(room_up, 0.0) : -std::max(room_down, 0.0);
+    }
+    sp.q0[j] = q0[j];
+    sp.omega[j] = w;
+  }
+  return sp;
+}
+
+//---- urt_step ----
+
+struct UrtRun {
+  double dt = 0;
+  std::string status = "ok";   // "ok" or "error"
+  std::string error;
+  Stats stats;
+  long step_errors = 0, refused_commands = 0;
+  unsigned pstop = 0, isat_count = 0, vsat_count = 0;
+  double max_track_err = 0;    // max |q_set − q| over the timed steps [rad]
+};
+
+// the model as loaded at the first rate, for the JSON (bench.py builds Pinocchio from it)
+struct ArmDump {
+  bool valid = false;
+  urt_arm_params_t arm;
+  double q0[URT_NJ], q_min[URT_NJ], q_max[URT_NJ];
+};
+
+std::string fmt_g(double v) {
+  char b[64];
+  snprintf(b, sizeof b, "%.12g", v);
+  return b;
+}
+
+// One urt_step workload at one dt: model, data and set-point. main() advances every case in
+// chunks, round robin, so all of them share the machine's quiet and busy moments.
+class UrtCase {
+ public:
+  UrtRun r;
+
+  // load at dt (the user's overrides, then dt) and start at rest; on failure r.status is
+  // "error" and the case is never stepped
+  UrtCase(const Options &o, double dt, ArmDump *dump) {
+    r.dt = dt;
+    std::vector<std::string> ovr_s = o.sets;
+    ovr_s.push_back(o.dt_key + "=" + fmt_g(dt));
+    std::vector<const char *> ovr;
+    for (const auto &s : ovr_s) {
+      ovr.push_back(s.c_str());
+    }
+    ovr.push_back(nullptr);
+    urt_model_t *m = nullptr;
+    char err[512] = "";
+    int rc = urt_model_load(o.config.c_str(), ovr.data(), &m, err, sizeof err);
+    if (rc != 0) {
+      fail(std::string("urt_model_load: ") + urt_strerror(rc) + (err[0] ? ": " : "") + err);
+      return;
+    }
+    m_.reset(m);
+
+    // a wrong dt key would silently benchmark the file's rate
+    if (std::fabs(m->dt - dt) > 1e-12 * dt) {
+      fail("override " + o.dt_key + "=" + fmt_g(dt) + " not applied (model dt = " +
+           fmt_g(m->dt) + "); pass the right key with --dt-key");
+      return;
+    }
+
+    double q_min[URT_NJ], q_max[URT_NJ], qd_max[URT_NJ], qdd_max[URT_NJ];
+    for (int j = 0; j < URT_NJ; ++j) {
+      q_min[j] = m->joint[j].q_min;
+      q_max[j] = m->joint[j].q_max;
+      qd_max[j] = m->joint[j].qd_max;
+      qdd_max[j] = m->joint[j].qdd_max;
+    }
+    sp_ = make_setpoint(m->q0, q_min, q_max, qd_max, qdd_max, o.speed);
+    if (dump != nullptr && !dump->valid) {
+      dump->valid = true;
+      dump->arm = m->arm;
+      memcpy(dump->q0, m->q0, sizeof dump->q0);
+      memcpy(dump->q_min, q_min, sizeof q_min);
+      memcpy(dump->q_max, q_max, sizeof q_max);
+    }
+
+    d_ = std::make_unique<urt_data_t>();
+    rc = urt_data_init(m, d_.get(), nullptr);
+    if (rc != 0) {
+      fail(std::string("urt_data_init: ") + urt_strerror(rc));
+      return;
+    }
+    memset(&cmd_, 0, sizeof cmd_);
+    // preallocated so the timed loop touches no allocator
+    samples_.assign(static_cast<size_t>(o.steps), 0);
+  }
+
+  bool ok() const { return r.status == "ok"; }
+  const Setpoint &setpoint() const { return sp_; }
+
+  // Advance n steps. Only urt_step is timed; the command is installed between steps, as the
+  // RT loop does.
+  void run(long n, bool timed) {
+    urt_model_t *m = m_.get();
+    urt_data_t *d = d_.get();
+    for (long k = 0; k < n; ++k) {
+      sp_.at(d->t, cmd_.q, cmd_.qd, cmd_.qdd);
+      if (urt_command_set(m, d, &cmd_) != 0) {
+        ++r.refused_commands;
+      }
+      int64_t t0 = now_ns();
+      int rc = urt_step(m, d);
+      int64_t t1 = now_ns();
+      if (!timed || done_ >= samples_.size()) {
+        continue;
+      }
+      samples_[done_++] = t1 - t0;
+      if (rc != 0) {
+        ++r.step_errors;
+      }
+      for (int j = 0; j < URT_NJ; ++j) {
+        r.max_track_err = std::max(r.max_track_err, std::fabs(cmd_.q[j] - d->x[j][URT_X_Q]));
+      }
+    }
+  }
+
+  void finish() {
+    if (!ok()) {
+      return;
+    }
+    r.pstop = d_->pstop;
+    r.isat_count = d_->isat_count;
+    r.vsat_count = d_->vsat_count;
+    samples_.resize(done_);
+    r.stats = summarise(std::move(samples_));
+  }
+
+ private:
+  void fail(const std::string &e) {
+    r.status = "error";
+    r.error = e;
+  }
+
+  std::unique_ptr<urt_model_t, void (*)(urt_model_t *)> m_{nullptr, urt_model_free};
+  std::unique_ptr<urt_data_t> d_;
+  Setpoint sp_{};
+  urt_command_t cmd_;
+  std::vector<int64_t> samples_;
+  size_t done_ = 0;
+};
+
+//---- MuJoCo through dlopen ----
+
+// The few C API entry points we need, typed by hand so the build needs no MuJoCo headers.
+// mjModel*/mjData* are opaque here; the pip wheel is a double (mjtNum = double) build.
+struct MjApi {
+  void *handle = nullptr;
+  void *(*load_xml)(const char *, const void *, char *, int) = nullptr;
+  void *(*make_data)(const void *) = nullptr;
+  void (*step)(const void *, void *) = nullptr;
+  void (*delete_data)(void *) = nullptr;
+  void (*delete_model)(void *) = nullptr;
+  void (*set_state)(const void *, void *, const double *, int) = nullptr;
+  void (*get_state)(const void *, const void *, double *, int) = nullptr;
+  int (*state_size)(const void *, int) = nullptr;
+  const char *(*version_string)(void) = nullptr;
+  std::string version;
+
+  // mjtState bits (mujoco/mjtype.h), stable since MuJoCo 3.0
+  static constexpr int kStateQpos = 1 << 1;
+  static constexpr int kStateCtrl = 1 << 6;
+
+  bool open(const std::string &path, std::string *err) {
+    handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (handle == nullptr) {
+      const char *e = dlerror();
+      *err = std::string("dlopen: ") + (e ? e : "failed");
+      return false;
+    }
+    bool ok = sym("mj_loadXML", &load_xml, err) && sym("mj_makeData", &make_data, err) &&
+              sym("mj_step", &step, err) && sym("mj_deleteData", &delete_data, err) &&
+              sym("mj_deleteModel", &delete_model, err) && sym("mj_setState", &set_state, err) &&
+              sym("mj_getState", &get_state, err) && sym("mj_stateSize", &state_size, err);
+    if (!ok) {
+      return false;
+    }
+    // optional: only for the report
+    version_string = reinterpret_cast<const char *(*)(void)>(dlsym(handle, "mj_versionString"));
+    version = version_string ? version_string() : "unknown";
+    return true;
+  }
+
+  template <typename F>
+  bool sym(const char *name, F *f, std::string *err) {
+    void *p = dlsym(handle, name);
+    if (p == nullptr) {
+      *err = std::string("dlsym ") + name + ": not found";
+      return false;
+    }
+    *f = reinterpret_cast<F>(p);
+    return true;
+  }
+
+  ~MjApi() {
+    if (handle != nullptr) {
+      dlclose(handle);
+    }
+  }
+};
+
+struct MjVariant {
+  const char *name;
+  const char *integrator;   // MJCF option/@integrator
+  bool frictionloss;        // joint dry friction → constraint solver every step
+};
+
+// "euler" is MuJoCo's default and the primary comparison; rk4 is the 4-stage explicit scheme
+// (urt_step is a 2-stage implicit one plus sub-steps); frictionloss adds the constraint solver,
+// the nearest MuJoCo gets to a friction model.
+const MjVariant kMjVariants[] = {
+    {"euler", "Euler", false},
+    {"rk4", "RK4", false},
+    {"euler_frictionloss", "Euler", true},
+};
+
+// UR5-like model (nominal UR5 "series 3" DH, model.md §1.8): masses, CoMs and inertias of
+// Table 5; armature τ²J_M (Table A1: 1.9147 / 0.2118 kg m²); viscous damping and frictionloss at
+// the proposed f_c (8 / 2 N m); position actuators with PD gains and torque limits 150 / 28 N m;
+// no contacts. Body i is DH frame i−1 turned by q_i, so the standard-DH fixed part
+// Tz(d)·Tx(a)·Rx(α) becomes the child body's pos/quat and link i's inertial sits at that
+// offset; fullinertia excludes a quat, so the tensor is rotated by Rx(α) here.
+std::string ur5_mjcf(double dt, const MjVariant &v) {
+  static const double a[6] = {0, -0.425, -0.39225, 0, 0, 0};
+  static const double d[6] = {0.089159, 0, 0, 0.10915, 0.09465, 0.0823};
+  static const double alpha[6] = {M_PI / 2, 0, 0, M_PI / 2, -M_PI / 2, 0};
+  static const double mass[6] = {3.7, 8.393, 2.33, 1.219, 1.219, 0.1879};
+  static const double com[6][3] = {{0, -0.02561, 0.00193}, {0.2125, 0, 0.11336},
+                                   {0.15, 0, 0.0265},      {0, -0.0018, 0.01634},
+                                   {0, 0.0018, 0.01634},   {0, 0, -0.001159}};
+  // Ixx Iyy Izz Ixy Ixz Iyz about the CoM, frame-i axes [1e-4 kg m²]
+  static const double inertia[6][6] = {{67, 64, 67, 0, 0, 0},     {149, 3564, 3553, 0, 0, 0},
+                                       {25, 551, 546, 0, 34, 0},  {12, 12, 9, 0, 0, 0},
+                                       {12, 12, 9, 0, 0, 0},      {1, 1, 1, 0, 0, 0}};
+  static const double armature[6] = {1.9147, 1.9147, 1.9147, 0.2118, 0.2118, 0.2118};
+  static const double damping[6] = {8, 8, 8, 2, 2, 2};
+  static const double kp[6] = {20000, 20000, 10000, 2000, 2000, 2000};
+  static const double kv[6] = {400, 400, 200, 20, 20, 20};
+  static const double tmax[6] = {150, 150, 150, 28, 28, 28};
+
+  std::string x;
+  char b[512];
+  snprintf(b, sizeof b,
+           "<mujoco model=\"ur5_like\">\n"
+           "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n"
+           "  <option timestep=\"%.12g\" integrator=\"%s\" gravity=\"0 0 -9.81\"/>\n"
+           "  <worldbody>\n",
+           dt, v.integrator);
+  x += b;
+  for (int i = 0; i < 6; ++i) {
+    std::string ind(4 + 2 * i, ' ');
+    if (i == 0) {
+      x += ind + "<body name=\"link1\">\n";
+    } else {
+      snprintf(b, sizeof b,
+               "%s<body name=\"link%d\" pos=\"%.12g 0 %.12g\" quat=\"%.12g %.12g 0 0\">\n",
+               ind.c_str(), i + 1, a[i - 1], d[i - 1], std::cos(alpha[i - 1] / 2),
+               std::sin(alpha[i - 1] / 2));
+      x += b;
+    }
+
+    // link i's inertial in body i: p = (a, 0, d) + R c, I_b = R I R^T with R = Rx(α)
+    double ca = std::cos(alpha[i]), sa = std::sin(alpha[i]);
+    double R[3][3] = {{1, 0, 0}, {0, ca, -sa}, {0, sa, ca}};
+    const double *in = inertia[i];
+    double I[3][3] = {{in[0], in[3], in[4]}, {in[3], in[1], in[5]}, {in[4], in[5], in[2]}};
+    double p[3] = {a[i], 0, d[i]}, Ib[3][3] = {};
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) {
+        p[r] += R[r][c] * com[i][c];
+        for (int k = 0; k < 3; ++k) {
+          for (int l = 0; l < 3; ++l) {
+            Ib[r][c] += R[r][k] * I[k][l] * R[c][l] * 1e-4;
+          }
+        }
+      }
+    }
+
+    // cos(π/2) leaves 1e-20-sized crumbs; zero them so the MJCF reads like the table
+    for (int r = 0; r < 3; ++r) {
+      p[r] = std::fabs(p[r]) < 1e-15 ? 0.0 : p[r];
+      for (int c = 0; c < 3; ++c) {
+        Ib[r][c] = std::fabs(Ib[r][c]) < 1e-15 ? 0.0 : Ib[r][c];
+      }
+    }
+    snprintf(b, sizeof b,
+             "%s  <joint name=\"j%d\" axis=\"0 0 1\" range=\"-6.2832 6.2832\" armature=\"%g\" "
+             "damping=\"%g\" frictionloss=\"%g\"/>\n"
+             "%s  <inertial pos=\"%.12g %.12g %.12g\" mass=\"%g\" "
+             "fullinertia=\"%.12g %.12g %.12g %.12g %.12g %.12g\"/>\n"
+             "%s  <geom type=\"capsule\" fromto=\"0 0 0 %.12g 0 %.12g\" size=\"0.04\" "
+             "contype=\"0\" conaffinity=\"0\"/>\n",
+             ind.c_str(), i + 1, armature[i], damping[i], v.frictionloss ? damping[i] : 0.0,
+             ind.c_str(), p[0], p[1], p[2], mass[i], Ib[0][0], Ib[1][1], Ib[2][2], Ib[0][1],
+             Ib[0][2], Ib[1][2], ind.c_str(), a[i], d[i]);
+    x += b;
+  }
+  for (int i = 5; i >= 0; --i) {
+    x += std::string(4 + 2 * i, ' ') + "</body>\n";
+  }
+  x += "  </worldbody>\n  <actuator>\n";
+  for (int i = 0; i < 6; ++i) {
+    snprintf(b, sizeof b,
+             "    <position joint=\"j%d\" kp=\"%g\" kv=\"%g\" forcelimited=\"true\" "
+             "forcerange=\"-%g %g\"/>\n",
+             i + 1, kp[i], kv[i], tmax[i], tmax[i]);
+    x += b;
+  }
+  x += "  </actuator>\n</mujoco>\n";
+  return x;
+}
+
+struct MjRun {
+  const MjVariant *variant = nullptr;
+  double dt = 0;
+  std::string status = "ok";
+  std::string error;
+  Stats stats;
+  double max_track_err = 0;
+};
+
+// mj_loadXML wants a file: write the MJCF to a private temp file and remove it right away
+void *mj_load_string(const MjApi &mj, const std::string &xml, std::string *err) {
+  const char *tmp = getenv("TMPDIR");
+  std::string path = std::string(tmp && *tmp ? tmp : "/tmp") + "/urt_bench_XXXXXX.xml";
+  std::vector<char> buf(path.begin(), path.end());
+  buf.push_back('\0');
+  int fd = mkstemps(buf.data(), 4);
+  if (fd < 0) {
+    *err = std::string("mkstemps: ") + strerror(errno);
+    return nullptr;
+  }
+  bool wrote = write(fd, xml.data(), xml.size()) == static_cast<ssize_t>(xml.size());
+  close(fd);
+  char e[1000] = "";
+  void *model = wrote ? mj.load_xml(buf.data(), nullptr, e, sizeof e) : nullptr;
+  unlink(buf.data());
+  if (model == nullptr) {
+    *err = wrote ? std::string("mj_loadXML: ") + e : "cannot write the temporary MJCF";
+  }
+  return model;
+}
+
+// One mj_step workload (variant, dt), stepped in chunks like UrtCase.
+class MjCase {
+ public:
+  MjRun r;
+
+  MjCase(const MjApi &mj, const Options &o, const MjVariant &v, double dt, const Setpoint &sp)
+      : mj_(mj), sp_(sp) {
+    r.variant = &v;
+    r.dt = dt;
+    model_ = mj_load_string(mj, ur5_mjcf(dt, v), &r.error);
+    if (model_ == nullptr) {
+      r.status = "error";
+      return;
+    }
+    data_ = mj.make_data(model_);
+    if (data_ == nullptr) {
+      r.status = "error";
+      r.error = "mj_makeData failed";
+      return;
+    }
+    if (mj.state_size(model_, MjApi::kStateQpos) != URT_NJ ||
+        mj.state_size(model_, MjApi::kStateCtrl) != URT_NJ) {
+      r.status = "error";
+      r.error = "unexpected nq/nu in the generated model";
+      return;
+    }
+
+    // start at the same q0 as urt, servo set-point there
+    mj.set_state(model_, data_, sp.q0, MjApi::kStateQpos);
+    mj.set_state(model_, data_, sp.q0, MjApi::kStateCtrl);
+    samples_.assign(static_cast<size_t>(o.steps), 0);
+  }
+
+  MjCase(const MjCase &) = delete;
+  MjCase &operator=(const MjCase &) = delete;
+  ~MjCase() {
+    if (data_ != nullptr) {
+      mj_.delete_data(data_);
+    }
+    if (model_ != nullptr) {
+      mj_.delete_model(model_);
+    }
+  }
+
+  bool ok() const { return r.status == "ok"; }
+
+  // Advance n steps. Only mj_step is timed, as for urt_step; ctrl is written between steps.
+  void run(long n, bool timed) {
+    double q[URT_NJ], qd[URT_NJ], qdd[URT_NJ], qpos[URT_NJ];
+    for (long k = 0; k < n; ++k) {
+      sp_.at(static_cast<double>(steps_++) * r.dt, q, qd, qdd);
+      mj_.set_state(model_, data_, q, MjApi::kStateCtrl);
+      int64_t t0 = now_ns();
+      mj_.step(model_, data_);
+      int64_t t1 = now_ns();
+      if (!timed || done_ >= samples_.size()) {
+        continue;
+      }
+      samples_[done_++] = t1 - t0;
+      mj_.get_state(model_, data_, qpos, MjApi::kStateQpos);
+      for (int j = 0; j < URT_NJ; ++j) {
+        r.max_track_err = std::max(r.max_track_err, std::fabs(q[j] - qpos[j]));
+      }
+    }
+  }
+
+  void finish() {
+    if (!ok()) {
+      return;
+    }
+    if (!std::isfinite(r.max_track_err)) {
+      r.status = "error";
+      r.error = "state became non-finite";
+    }
+    samples_.resize(done_);
+    r.stats = summarise(std::move(samples_));
+  }
+
+ private:
+  const MjApi &mj_;
+  Setpoint sp_;
+  void *model_ = nullptr;
+  void *data_ = nullptr;
+  std::vector<int64_t> samples_;
+  size_t done_ = 0;
+  long steps_ = 0;
+};
+
+//---- JSON ----
+
+// A minimal writer: enough for numbers, strings, arrays and objects, with commas placed for us.
+class Json {
+ public:
+  void begin_object(const char *key = nullptr) { open(key, '{'); }
+  void end_object() { close('}'); }
+  void begin_array(const char *key = nullptr) { open(key, '['); }
+  void end_array() { close(']'); }
+  void num(const char *key, double v) {
+    prefix(key);
+    if (std::isfinite(v)) {
+      char b[64];
+      snprintf(b, sizeof b, "%.9g", v);
+      s_ += b;
+    } else {
+      s_ += "null";
+    }
+  }
+  void integer(const char *key, long long v) {
+    prefix(key);
+    s_ += std::to_string(v);
+  }
+  void boolean(const char *key, bool v) {
+    prefix(key);
+    s_ += v ? "true" : "false";
+  }
+  void str(const char *key, const std::string &v) {
+    prefix(key);
+    quote(v);
+  }
+  void nums(const char *key, const double *v, int n) {
+    begin_array(key);
+    for (int i = 0; i < n; ++i) {
+      num(nullptr, v[i]);
+    }
+    end_array();
+  }
+  const std::string &text() const { return s_; }
+
+ private:
+  void quote(const std::string &v) {
+    s_ += '"';
+    for (unsigned char c : v) {
+      if (c == '"' || c == '\\') {
+        s_ += '\\';
+        s_ += static_cast<char>(c);
+      } else if (c < 0x20) {
+        char b[8];
+        snprintf(b, sizeof b, "\\u%04x", c);
+        s_ += b;
+      } else {
+        s_ += static_cast<char>(c);
+      }
+    }
+    s_ += '"';
+  }
+  void prefix(const char *key) {
+    if (!first_.empty()) {
+      if (!first_.back()) {
+        s_ += ',';
+      }
+      first_.back() = false;
+      s_ += '\n';
+      s_ += std::string(2 * first_.size(), ' ');
+    }
+    if (key != nullptr) {
+      quote(key);
+      s_ += ": ";
+    }
+  }
+  void open(const char *key, char c) {
+    prefix(key);
+    s_ += c;
+    first_.push_back(true);
+  }
+  void close(char c) {
+    bool empty = first_.back();
+    first_.pop_back();
+    if (!empty) {
+      s_ += '\n' + std::string(2 * first_.size(), ' ');
+    }
+    s_ += c;
+  }
+  std::string s_;
+  std::vector<bool> first_;
+};
+
+void json_stats(Json &j, const Stats &s, double dt) {
+  j.integer("n", s.n);
+  j.num("median_us", s.median_us);
+  j.num("p99_us", s.p99_us);
+  j.num("p999_us", s.p999_us);
+  j.num("max_us", s.max_us);
+  j.num("mean_us", s.mean_us);
+  j.num("min_us", s.min_us);
+  // real-time factor: simulated time per wall time at the median cost (> 1 is faster than RT)
+  j.num("rtf", s.median_us > 0 ? dt * 1e6 / s.median_us : NAN);
+  j.num("wall_s_per_sim_s", s.median_us * 1e-6 / dt);
+  j.num("budget_fraction_median", s.median_us * 1e-6 / dt);
+  j.num("budget_fraction_p999", s.p999_us * 1e-6 / dt);
+}
+
+const MjRun *find_mj(const std::vector<MjRun> &runs, const char *variant, double dt) {
+  for (const auto &r : runs) {
+    if (r.status == "ok" && strcmp(r.variant->name, variant) == 0 && r.dt == dt) {
+      return &r;
+    }
+  }
+  return nullptr;
+}
+
+//---- report ----
+
+struct Report {
+  double clock_overhead_ns = 0;
+  std::string urt_status = "ok", urt_error;
+  std::vector<UrtRun> urt;
+  ArmDump arm;
+  std::string mj_status = "ok", mj_error, mj_version;
+  std::vector<MjRun> mj;
+};
+
+std::string rate_label(double dt) {
+  char b[32];
+  snprintf(b, sizeof b, "%g kHz", 1e-3 / dt);
+  return b;
+}
+
+std::string to_json(const Options &o, const Report &rep) {
+  Json j;
+  j.begin_object();
+  j.str("tool", "urt_bench");
+  j.integer("schema", 1);
+  j.integer("steps", o.steps);
+  j.integer("warmup", o.warmup);
+  j.integer("interleave_chunk", o.chunk);
+  j.integer("cpu", o.cpu);
+  j.begin_object("clock");
+  j.str("source", "CLOCK_MONOTONIC");
+  j.num("overhead_ns", rep.clock_overhead_ns);
+  j.str("note", "per-sample overhead, reported, not subtracted");
+  j.end_object();
+
+  j.begin_object("urt");
+  j.str("status", rep.urt_status);
+  if (!rep.urt_error.empty()) {
+    j.str("error", rep.urt_error);
+  }
+  j.str("config", o.config);
+  j.str("dt_key", o.dt_key);
+  j.begin_array("overrides");
+  for (const auto &s : o.sets) {
+    j.str(nullptr, s);
+  }
+  j.end_array();
+  j.str("timed", "urt_step only (urt_command_set runs between steps, untimed)");
+  j.str("setpoint", "q = q0 + A(1 - cos wt), f = 0.25..0.5 Hz per joint, peak speed <= --speed");
+  j.num("speed_rad_s", o.speed);
+  j.begin_array("runs");
+  for (const auto &r : rep.urt) {
+    j.begin_object();
+    j.num("dt", r.dt);
+    j.num("rate_hz", 1.0 / r.dt);
+    j.str("status", r.status);
+    if (r.status != "ok") {
+      j.str("error", r.error);
+    } else {
+      json_stats(j, r.stats, r.dt);
+      j.integer("step_errors", r.step_errors);
+      j.integer("refused_commands", r.refused_commands);
+      j.integer("pstop", r.pstop);
+      j.integer("isat_count", r.isat_count);
+      j.integer("vsat_count", r.vsat_count);
+      j.num("max_tracking_error_rad", r.max_track_err);
+    }
+    j.end_object();
+  }
+  j.end_array();
+  j.end_object();
+
+  // the arm as the core loaded it, in urt_config's JSON layout
+  if (rep.arm.valid) {
+    const urt_arm_params_t &a = rep.arm.arm;
+    j.begin_object("arm");
+    j.nums("gravity", a.gravity, 3);
+    j.nums("tcp", a.tcp, 6);
+    j.begin_array("links");
+    for (int i = 0; i < URT_NJ; ++i) {
+      const urt_link_params_t &l = a.link[i];
+      j.begin_object();
+      j.num("a", l.a);
+      j.num("alpha", l.alpha);
+      j.num("beta", l.beta);
+      j.num("d", l.d);
+      j.num("theta", l.theta);
+      j.num("mass", l.mass);
+      j.nums("com", l.com, 3);
+      j.nums("inertia", l.inertia, 6);
+      j.end_object();
+    }
+    j.end_array();
+    j.nums("q0", rep.arm.q0, URT_NJ);
+    j.nums("q_min", rep.arm.q_min, URT_NJ);
+    j.nums("q_max", rep.arm.q_max, URT_NJ);
+    j.end_object();
+  }
+
+  j.begin_object("mujoco");
+  j.str("status", rep.mj_status);
+  if (!rep.mj_error.empty()) {
+    j.str("error", rep.mj_error);
+  }
+  j.str("lib", o.mujoco_lib);
+  j.str("version", rep.mj_version);
+  j.str("model",
+        "UR5-like MJCF: 6 hinges, nominal UR5 DH, model.md Table 5 masses/CoMs/inertias, "
+        "armature tau^2 J_M, damping 8/2 N m s/rad, position actuators (kp 2e4..2e3, kv) "
+        "limited to 150/28 N m, no contacts (contype=conaffinity=0)");
+  j.str("timestep", "matched to each urt dt");
+  j.str("timed", "mj_step only (ctrl set between steps, untimed)");
+  j.begin_array("runs");
+  for (const auto &r : rep.mj) {
+    j.begin_object();
+    j.str("variant", r.variant->name);
+    j.str("integrator", r.variant->integrator);
+    j.boolean("frictionloss", r.variant->frictionloss);
+    j.num("dt", r.dt);
+    j.str("status", r.status);
+    if (r.status != "ok") {
+      j.str("error", r.error);
+    } else {
+      json_stats(j, r.stats, r.dt);
+      j.num("max_tracking_error_rad", r.max_track_err);
+    }
+    j.end_object();
+  }
+  j.end_array();
+  j.end_object();
+
+  // urt_step / mj_step medians at the same dt, for every MuJoCo variant measured
+  j.begin_array("ratios");
+  for (const auto &u : rep.urt) {
+    if (u.status != "ok") {
+      continue;
+    }
+    for (const auto &v : kMjVariants) {
+      const MjRun *mr = find_mj(rep.mj, v.name, u.dt);
+      if (mr == nullptr) {
+        continue;
+      }
+      j.begin_object();
+      j.num("dt", u.dt);
+      j.str("numerator", "urt_step median");
+      j.str("denominator", std::string("mj_step median (") + v.name + ")");
+      j.num("value", u.stats.median_us / mr->stats.median_us);
+      j.num("p99_value", u.stats.p99_us / mr->stats.p99_us);
+      j.end_object();
+    }
+  }
+  j.end_array();
+  j.end_object();
+  return j.text() + "\n";
+}
+
+void print_row(const std::string &name, double dt, const Stats &s) {
+  printf("%-34s %7.1f %9.3f %9.3f %9.3f %9.1f %9.3f %8.2f %8.3f\n", name.c_str(), dt * 1e6,
+         s.median_us, s.p99_us, s.p999_us, s.max_us, s.mean_us, dt * 1e6 / s.median_us,
+         s.median_us * 1e-6 / dt);
+}
+
+void print_table(const Options &o, const Report &rep) {
+  printf("urt_bench: %ld timed steps (+%ld warm-up) per case, cases interleaved every %ld "
+         "steps; CLOCK_MONOTONIC, overhead %.0f ns per sample (not subtracted)\n",
+         o.steps, o.warmup, o.chunk, rep.clock_overhead_ns);
+  printf("%-34s %7s %9s %9s %9s %9s %9s %8s %8s\n", "case", "dt[us]", "median", "p99", "p99.9",
+         "max", "mean", "RTF", "wall/sim");
+  printf("%-34s %7s %9s %9s %9s %9s %9s %8s %8s\n", "", "", "[us]", "[us]", "[us]", "[us]", "[us]",
+         "", "[s/s]");
+  if (rep.urt.empty()) {
+    printf("%-34s %s\n", "urt_step", rep.urt_status.c_str());
+  }
+  for (const auto &r : rep.urt) {
+    std::string name = "urt_step " + rate_label(r.dt);
+    if (r.status == "ok") {
+      print_row(name, r.dt, r.stats);
+    } else {
+      printf("%-34s error: %s\n", name.c_str(), r.error.c_str());
+    }
+  }
+  if (rep.mj_status != "ok") {
+    printf("%-34s %s: %s\n", "mj_step", rep.mj_status.c_str(), rep.mj_error.c_str());
+  }
+  for (const auto &r : rep.mj) {
+    std::string name = std::string("mj_step ") + r.variant->name + " " + rate_label(r.dt);
+    if (r.status == "ok") {
+      print_row(name, r.dt, r.stats);
+    } else {
+      printf("%-34s error: %s\n", name.c_str(), r.error.c_str());
+    }
+  }
+  for (const auto &u : rep.urt) {
+    if (u.status != "ok") {
+      continue;
+    }
+    for (const auto &v : kMjVariants) {
+      const MjRun *mr = find_mj(rep.mj, v.name, u.dt);
+      if (mr != nullptr) {
+        printf("ratio urt_step / mj_step(%s) at %s: %.2f (median), %.2f (p99)\n", v.name,
+               rate_label(u.dt).c_str(), u.stats.median_us / mr->stats.median_us,
+               u.stats.p99_us / mr->stats.p99_us);
+      }
+    }
+  }
+}
+
+// UR5 "home" used for MuJoCo when the core is skipped or fails to load
+const double kFallbackQ0[URT_NJ] = {0, -M_PI / 2, M_PI / 2, -M_PI / 2, -M_PI / 2, 0};
+
+}  // namespace
+}  // namespace urt::tools
+
+int main(int argc, char **argv) {
+  using namespace urt::tools;
+  Options o;
+  int prc = parse_options(argc, argv, &o);
+  if (prc != 0) {
+    return prc == 1 ? 0 : 2;
+  }
+
+  // optional environment tweaks; failures are warnings, the numbers just get noisier
+  if (o.cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(o.cpu, &set);
+    if (sched_setaffinity(0, sizeof set, &set) != 0) {
+      fprintf(stderr, "urt_bench: warning: cannot pin to CPU %d: %s\n", o.cpu, strerror(errno));
+    }
+  }
+  int dma_fd = -1;
+  if (o.dma_latency) {
+    // the kernel keeps C-states shallow only while this fd stays open
+    dma_fd = open("/dev/cpu_dma_latency", O_WRONLY);
+    int32_t zero = 0;
+    if (dma_fd < 0 || write(dma_fd, &zero, sizeof zero) != sizeof zero) {
+      fprintf(stderr, "urt_bench: warning: /dev/cpu_dma_latency: %s\n", strerror(errno));
+    }
+  }
+
+  Report rep;
+  rep.clock_overhead_ns = clock_overhead_ns();
+
+  // urt_step at every rate; the first successful load also gives q0 and limits for MuJoCo
+  std::vector<std::unique_ptr<UrtCase>> urt_cases;
+  Setpoint sp{};
+  bool have_sp = false;
+  if (o.skip_urt) {
+    rep.urt_status = "skipped";
+  } else {
+    for (double dt : o.dts) {
+      urt_cases.push_back(std::make_unique<UrtCase>(o, dt, &rep.arm));
+      const UrtCase &c = *urt_cases.back();
+      if (c.ok() && !have_sp) {
+        sp = c.setpoint();
+        have_sp = true;
+      }
+    }
+  }
+  if (!have_sp) {
+    double lo[URT_NJ], hi[URT_NJ], qd[URT_NJ], qdd[URT_NJ];
+    for (int j = 0; j < URT_NJ; ++j) {
+      lo[j] = -2 * M_PI;
+      hi[j] = 2 * M_PI;
+      qd[j] = M_PI;
+      qdd[j] = 10;
+    }
+    sp = make_setpoint(kFallbackQ0, lo, hi, qd, qdd, o.speed);
+  }
+
+  // mj_step on the same set-point; never fatal
+  MjApi mj;
+  std::string mj_err;
+  std::vector<std::unique_ptr<MjCase>> mj_cases;
+  if (o.skip_mujoco) {
+    rep.mj_status = "skipped";
+  } else if (o.mujoco_lib.empty()) {
+    rep.mj_status = "unavailable";
+    rep.mj_error = "no --mujoco-lib given";
+  } else if (!mj.open(o.mujoco_lib, &mj_err)) {
+    rep.mj_status = "unavailable";
+    rep.mj_error = mj_err;
+  } else {
+    rep.mj_version = mj.version;
+    for (double dt : o.dts) {
+      for (const auto &v : kMjVariants) {
+        mj_cases.push_back(std::make_unique<MjCase>(mj, o, v, dt, sp));
+      }
+    }
+  }
+
+  // warm up each case, then time them round robin in chunks: a busy spell on this shared
+  // machine then lands on every case alike, instead of on whichever ran at that moment
+  for (auto &c : urt_cases) {
+    if (c->ok()) {
+      c->run(o.warmup, false);
+    }
+  }
+  for (auto &c : mj_cases) {
+    if (c->ok()) {
+      c->run(o.warmup, false);
+    }
+  }
+  for (long left = o.steps; left > 0; left -= o.chunk) {
+    long n = std::min(left, o.chunk);
+    for (auto &c : urt_cases) {
+      if (c->ok()) {
+        c->run(n, true);
+      }
+    }
+    for (auto &c : mj_cases) {
+      if (c->ok()) {
+        c->run(n, true);
+      }
+    }
+  }
+
+  for (auto &c : urt_cases) {
+    c->finish();
+    const UrtRun &r = c->r;
+    if (r.status != "ok") {
+      fprintf(stderr, "urt_bench: urt_step at dt=%g: %s\n", r.dt, r.error.c_str());
+      rep.urt_status = "error";
+      rep.urt_error = r.error;
+    } else if (r.step_errors || r.refused_commands || r.pstop) {
+      fprintf(stderr,
+              "urt_bench: warning: dt=%g: %ld step errors, %ld refused commands, pstop=0x%x "
+              "(timings may not be of a moving arm)\n",
+              r.dt, r.step_errors, r.refused_commands, r.pstop);
+    }
+    rep.urt.push_back(r);
+  }
+  for (auto &c : mj_cases) {
+    c->finish();
+    if (c->r.status != "ok") {
+      fprintf(stderr, "urt_bench: mj_step %s dt=%g: %s\n", c->r.variant->name, c->r.dt,
+              c->r.error.c_str());
+    }
+    rep.mj.push_back(c->r);
+  }
+  mj_cases.clear();  // before mj (declared earlier) closes the library
+
+  if (!o.mjcf_out.empty()) {
+    FILE *f = fopen(o.mjcf_out.c_str(), "w");
+    if (f == nullptr || fputs(ur5_mjcf(o.dts.front(), kMjVariants[0]).c_str(), f) < 0) {
+      fprintf(stderr, "urt_bench: cannot write %s\n", o.mjcf_out.c_str());
+    }
+    if (f != nullptr) {
+      fclose(f);
+    }
+  }
+
+  if (!o.json.empty()) {
+    FILE *f = fopen(o.json.c_str(), "w");
+    std::string text = to_json(o, rep);
+    if (f == nullptr || fputs(text.c_str(), f) < 0) {
+      fprintf(stderr, "urt_bench: cannot write %s: %s\n", o.json.c_str(), strerror(errno));
+      if (f != nullptr) {
+        fclose(f);
+      }
+      return 1;
+    }
+    fclose(f);
+  }
+  if (!o.quiet) {
+    print_table(o, rep);
+  }
+  if (dma_fd >= 0) {
+    close(dma_fd);
+  }
+  // the core is what is being measured: failing to run it is a failure, MuJoCo's absence is not
+  return rep.urt_status == "error" ? 1 : 0;
+}
