@@ -13,13 +13,53 @@
 namespace urt::core {
 namespace detail {
 
+// A plain 3-vector for the RNEA and CRBA loops. At -O2 Eigen's Vector3d goes through 2+1 SSE
+// lanes with shuffles between them; the scalar loops measured 25–40 % faster on the dev
+// machine (RNEA 245 against 325 ns, CRBA 300 against 500 ns). Kinematics stays Eigen.
+struct V3 {
+  double x, y, z;
+};
+inline V3 operator+(V3 a, V3 b) noexcept { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline V3 operator-(V3 a, V3 b) noexcept { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline V3 operator*(double s, V3 a) noexcept { return {s * a.x, s * a.y, s * a.z}; }
+inline V3& operator+=(V3& a, V3 b) noexcept { return a = a + b; }
+inline double dot(V3 a, V3 b) noexcept { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline V3 cross(V3 a, V3 b) noexcept {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline V3 v3(const Vec3& v) noexcept { return {v[0], v[1], v[2]}; }
+inline V3 mul(const Mat3& R, V3 v) noexcept {  // R v
+  return {R(0, 0) * v.x + R(0, 1) * v.y + R(0, 2) * v.z,
+          R(1, 0) * v.x + R(1, 1) * v.y + R(1, 2) * v.z,
+          R(2, 0) * v.x + R(2, 1) * v.y + R(2, 2) * v.z};
+}
+inline V3 tmul(const Mat3& R, V3 v) noexcept {  // Rᵀ v
+  return {R(0, 0) * v.x + R(1, 0) * v.y + R(2, 0) * v.z,
+          R(0, 1) * v.x + R(1, 1) * v.y + R(2, 1) * v.z,
+          R(0, 2) * v.x + R(1, 2) * v.y + R(2, 2) * v.z};
+}
+
+// Symmetric 3×3 (an inertia tensor).
+struct Sym3 {
+  double xx, yy, zz, xy, xz, yz;
+};
+inline V3 mul(const Sym3& I, V3 v) noexcept {
+  return {I.xx * v.x + I.xy * v.y + I.xz * v.z, I.xy * v.x + I.yy * v.y + I.yz * v.z,
+          I.xz * v.x + I.yz * v.y + I.zz * v.z};
+}
+
 // Constant data of link i in its own DH frame i+1 (zero-based i).
 struct Body {
-  Vec3 s;     // joint axis                                  [-]
-  Vec3 sv;    // linear part of the motion subspace S = (s; sv) [m]
-  double m;   // mass                                        [kg]
-  Vec3 h;     // first moment m·c                            [kg m]
-  Mat3 I_o;   // rotational inertia about the frame origin   [kg m²]
+  V3 s;        // joint axis                                     [-]
+  V3 sv;       // linear part of the motion subspace S = (s; sv) [m]
+  double m;    // mass                                           [kg]
+  V3 h;        // first moment m·c                               [kg m]
+  Sym3 I_o;    // rotational inertia about the frame origin      [kg m²]
+};
+
+// The six bodies' constants, gathered once per call and shared by RNEA and CRBA.
+struct Bodies {
+  Body b[URT_NJ];
 };
 
 inline void body(const urt_arm_params_t& a, int i, Body& b) noexcept {
@@ -27,31 +67,26 @@ inline void body(const urt_arm_params_t& a, int i, Body& b) noexcept {
   const double* F = a.fixed[i];
 
   // joint i turns about ẑ of the parent frame, through its origin. In frame i+1 that axis is
-  // s = R_F^T ẑ (row 2 of R_F), and the origin sits at p* = R_F^T (t_F + d ẑ) from it, so the
+  // s = R_Fᵀ ẑ (row 2 of R_F), and the origin sits at p* = R_Fᵀ (t_F + d ẑ) from it, so the
   // motion subspace is S = (s; s × p*); with t_F = a x̂ (eq. 8) this is (s; a · row 1 of R_F)
-  b.s << F[8], F[9], F[10];
-  b.sv << l.a * F[4], l.a * F[5], l.a * F[6];
+  b.s = {F[8], F[9], F[10]};
+  b.sv = {F[3] * F[4], F[3] * F[5], F[3] * F[6]};
 
   // spatial inertia about the frame origin from Table 5's CoM values (parallel axes),
-  // I_o = I_c + m (|c|² 1 − c cᵀ), written out to keep it cheap
+  // I_o = I_c + m (|c|² 1 − c cᵀ)
   const double m = l.mass, cx = l.com[0], cy = l.com[1], cz = l.com[2];
   const double* J = l.inertia;  // Ixx Iyy Izz Ixy Ixz Iyz
   b.m = m;
-  b.h << m * cx, m * cy, m * cz;
-  b.I_o(0, 0) = J[0] + m * (cy * cy + cz * cz);
-  b.I_o(1, 1) = J[1] + m * (cx * cx + cz * cz);
-  b.I_o(2, 2) = J[2] + m * (cx * cx + cy * cy);
-  b.I_o(0, 1) = b.I_o(1, 0) = J[3] - m * cx * cy;
-  b.I_o(0, 2) = b.I_o(2, 0) = J[4] - m * cx * cz;
-  b.I_o(1, 2) = b.I_o(2, 1) = J[5] - m * cy * cz;
+  b.h = {m * cx, m * cy, m * cz};
+  b.I_o = {J[0] + m * (cy * cy + cz * cz), J[1] + m * (cx * cx + cz * cz),
+           J[2] + m * (cx * cx + cy * cy), J[3] - m * cx * cy,
+           J[4] - m * cx * cz,             J[5] - m * cy * cz};
 }
 
-// R x and Rᵀ x for 3×3, written out: Eigen's generic product is an out-of-line call here.
-inline Vec3 mul(const Mat3& R, const Vec3& x) noexcept {
-  return R.col(0) * x[0] + R.col(1) * x[1] + R.col(2) * x[2];
-}
-inline Vec3 tmul(const Mat3& R, const Vec3& x) noexcept {
-  return Vec3(R.col(0).dot(x), R.col(1).dot(x), R.col(2).dot(x));
+inline void bodies(const urt_arm_params_t& a, Bodies& B) noexcept {
+  for (int i = 0; i < URT_NJ; ++i) {
+    body(a, i, B.b[i]);
+  }
 }
 
 // Pose of the TCP in the flange frame (row-major 3×4 of tcp_fixed).
@@ -62,8 +97,6 @@ inline void tcp_offset(const urt_arm_params_t& a, Mat3& R, Vec3& p) noexcept {
 }
 
 }  // namespace detail
-
-using detail::Body;
 
 //---- kinematics ----
 
@@ -142,55 +175,44 @@ void jacobian(const urt_arm_params_t& a, const Vec6& q, Mat6& J) noexcept {
 
 namespace detail {
 
-// The six bodies' constants, gathered once per call and shared by RNEA and CRBA.
-struct Bodies {
-  Body b[URT_NJ];
-};
-
-inline void bodies(const urt_arm_params_t& a, Bodies& B) noexcept {
-  for (int i = 0; i < URT_NJ; ++i) {
-    body(a, i, B.b[i]);
-  }
-}
-
 void rnea(const urt_arm_params_t& a, const Bodies& B, const ArmKinematics& k, const Vec6& qd,
           const Vec6& qdd, Vec6& tau) noexcept {
   const Body* b = B.b;
-  Vec3 n[URT_NJ], f[URT_NJ];
+  V3 n[URT_NJ], f[URT_NJ];
 
   // forward pass: body velocities and accelerations, each in its own frame; gravity is a base
   // acceleration of −g so the forces below already carry the weights
-  Vec3 w = Vec3::Zero(), v = Vec3::Zero(), dw = Vec3::Zero();
-  Vec3 dv(-a.gravity[0], -a.gravity[1], -a.gravity[2]);
+  V3 w = {0.0, 0.0, 0.0}, v = w, dw = w;
+  V3 dv = {-a.gravity[0], -a.gravity[1], -a.gravity[2]};
   for (int i = 0; i < URT_NJ; ++i) {
     const Mat3& R = k.R_PC[i];
-    const Vec3& p = k.p_PC[i];
+    const V3 p = v3(k.p_PC[i]);
 
     // carry the parent's motion to this frame's origin, then add the joint's own
-    const Vec3 w_p = detail::tmul(R, w);
-    const Vec3 v_p = detail::tmul(R, v - p.cross(w));
-    const Vec3 dw_p = detail::tmul(R, dw);
-    const Vec3 dv_p = detail::tmul(R, dv - p.cross(dw));
-    const Vec3 ws = b[i].s * qd[i], vs = b[i].sv * qd[i];
+    const V3 w_p = tmul(R, w);
+    const V3 v_p = tmul(R, v - cross(p, w));
+    const V3 dw_p = tmul(R, dw);
+    const V3 dv_p = tmul(R, dv - cross(p, dw));
+    const V3 ws = qd[i] * b[i].s, vs = qd[i] * b[i].sv;
     w = w_p + ws;
     v = v_p + vs;
-    dw = dw_p + b[i].s * qdd[i] + w_p.cross(ws);
-    dv = dv_p + b[i].sv * qdd[i] + w_p.cross(vs) + v_p.cross(ws);
+    dw = dw_p + qdd[i] * b[i].s + cross(w_p, ws);
+    dv = dv_p + qdd[i] * b[i].sv + cross(w_p, vs) + cross(v_p, ws);
 
-    // body force f = I a + v ×* (I v)
-    const Vec3 L = detail::mul(b[i].I_o, w) + b[i].h.cross(v);  // angular momentum about the origin
-    const Vec3 P = b[i].m * v - b[i].h.cross(w);    // linear momentum
-    n[i] = detail::mul(b[i].I_o, dw) + b[i].h.cross(dv) + w.cross(L) + v.cross(P);
-    f[i] = b[i].m * dv - b[i].h.cross(dw) + w.cross(P);
+    // body force f = I a + v ×* (I v), from the momenta about the origin
+    const V3 L = mul(b[i].I_o, w) + cross(b[i].h, v);
+    const V3 P = b[i].m * v - cross(b[i].h, w);
+    n[i] = mul(b[i].I_o, dw) + cross(b[i].h, dv) + cross(w, L) + cross(v, P);
+    f[i] = b[i].m * dv - cross(b[i].h, dw) + cross(w, P);
   }
 
   // backward pass: project on the joint axis, hand the rest to the parent
   for (int i = URT_NJ - 1; i >= 0; --i) {
-    tau[i] = b[i].s.dot(n[i]) + b[i].sv.dot(f[i]);
+    tau[i] = dot(b[i].s, n[i]) + dot(b[i].sv, f[i]);
     if (i > 0) {
-      const Vec3 f_p = detail::mul(k.R_PC[i], f[i]);
+      const V3 f_p = mul(k.R_PC[i], f[i]);
       f[i - 1] += f_p;
-      n[i - 1] += detail::mul(k.R_PC[i], n[i]) + k.p_PC[i].cross(f_p);
+      n[i - 1] += mul(k.R_PC[i], n[i]) + cross(v3(k.p_PC[i]), f_p);
     }
   }
 }
@@ -198,37 +220,58 @@ void rnea(const urt_arm_params_t& a, const Bodies& B, const ArmKinematics& k, co
 void crba(const Bodies& B, const ArmKinematics& k, Mat6& M) noexcept {
   const Body* b = B.b;
 
-  // composite inertias start as the bodies themselves and gather the subtree from the tip
+  // composite inertias (m, h, I about the frame origin) gather the subtree from the tip
   double m = 0.0;
-  Vec3 h = Vec3::Zero();
-  Mat3 I = Mat3::Zero();
+  V3 h = {0.0, 0.0, 0.0};
+  double I[3][3] = {};
   for (int i = URT_NJ - 1; i >= 0; --i) {
+    const Sym3& J = b[i].I_o;
     m += b[i].m;
     h += b[i].h;
-    I += b[i].I_o;
+    I[0][0] += J.xx;
+    I[1][1] += J.yy;
+    I[2][2] += J.zz;
+    I[0][1] = I[1][0] = I[0][1] + J.xy;
+    I[0][2] = I[2][0] = I[0][2] + J.xz;
+    I[1][2] = I[2][1] = I[1][2] + J.yz;
 
     // force the subtree needs for a unit rate of joint i, walked down to the base
-    Vec3 n = detail::mul(I, b[i].s) + h.cross(b[i].sv);
-    Vec3 f = m * b[i].sv - h.cross(b[i].s);
-    M(i, i) = b[i].s.dot(n) + b[i].sv.dot(f);
+    const V3 s = b[i].s, sv = b[i].sv;
+    V3 n = V3{I[0][0] * s.x + I[0][1] * s.y + I[0][2] * s.z,
+              I[1][0] * s.x + I[1][1] * s.y + I[1][2] * s.z,
+              I[2][0] * s.x + I[2][1] * s.y + I[2][2] * s.z} + cross(h, sv);
+    V3 f = m * sv - cross(h, s);
+    M(i, i) = dot(s, n) + dot(sv, f);
     for (int j = i; j > 0; --j) {
-      f = detail::mul(k.R_PC[j], f);
-      n = detail::mul(k.R_PC[j], n) + k.p_PC[j].cross(f);
-      M(i, j - 1) = M(j - 1, i) = b[j - 1].s.dot(n) + b[j - 1].sv.dot(f);
+      f = mul(k.R_PC[j], f);
+      n = mul(k.R_PC[j], n) + cross(v3(k.p_PC[j]), f);
+      M(i, j - 1) = M(j - 1, i) = dot(b[j - 1].s, n) + dot(b[j - 1].sv, f);
     }
 
     // express the composite in the parent's frame: rotate, then shift the origin by p,
     //   I' = R I Rᵀ + (2 p·h' + m |p|²) 1 − h' pᵀ − p h'ᵀ − m p pᵀ,   h' = R h + m p
-    // (R I Rᵀ is symmetric: form one triangle and mirror it)
+    // (one triangle of the symmetric result, then mirrored)
     if (i > 0) {
       const Mat3& R = k.R_PC[i];
-      const Vec3& p = k.p_PC[i];
-      const Vec3 hr = detail::mul(R, h);
-      const Mat3 hp = hr * p.transpose();
-      I = R * I * R.transpose();
-      I += (2.0 * p.dot(hr) + m * p.squaredNorm()) * Mat3::Identity() - hp - hp.transpose() -
-           m * p * p.transpose();
-      h = hr + m * p;
+      const V3 hr = mul(R, h);
+      const double p[3] = {k.p_PC[i][0], k.p_PC[i][1], k.p_PC[i][2]};
+      const double g[3] = {hr.x, hr.y, hr.z};
+      double T[3][3];  // I Rᵀ
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          T[r][c] = I[r][0] * R(c, 0) + I[r][1] * R(c, 1) + I[r][2] * R(c, 2);
+        }
+      }
+      const double diag = 2.0 * (p[0] * g[0] + p[1] * g[1] + p[2] * g[2]) +
+                          m * (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+      for (int r = 0; r < 3; ++r) {
+        for (int c = r; c < 3; ++c) {
+          I[r][c] = I[c][r] = R(r, 0) * T[0][c] + R(r, 1) * T[1][c] + R(r, 2) * T[2][c] -
+                              g[r] * p[c] - p[r] * g[c] - m * p[r] * p[c];
+        }
+        I[r][r] += diag;
+      }
+      h = hr + m * V3{p[0], p[1], p[2]};
     }
   }
 }
@@ -289,26 +332,27 @@ void rnea(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, const Vec6& 
 }
 
 void gravity(const urt_arm_params_t& a, const Vec6& q, Vec6& g) noexcept {
+  using detail::V3;
   ArmKinematics k;
   arm_kinematics(a, q, k);
 
   // at rest only the base acceleration −g survives: each body carries m (−g) at its CoM
-  Vec3 n[URT_NJ], f[URT_NJ];
-  Vec3 dv(-a.gravity[0], -a.gravity[1], -a.gravity[2]);
+  V3 n[URT_NJ], f[URT_NJ];
+  V3 dv = {-a.gravity[0], -a.gravity[1], -a.gravity[2]};
   for (int i = 0; i < URT_NJ; ++i) {
     const urt_link_params_t& l = a.link[i];
     dv = detail::tmul(k.R_PC[i], dv);
     f[i] = l.mass * dv;
-    n[i] = Vec3(l.com[0], l.com[1], l.com[2]).cross(f[i]);
+    n[i] = detail::cross(V3{l.com[0], l.com[1], l.com[2]}, f[i]);
   }
   for (int i = URT_NJ - 1; i >= 0; --i) {
-    Body b;
-    detail::body(a, i, b);
-    g[i] = b.s.dot(n[i]) + b.sv.dot(f[i]);
+    const double* F = a.fixed[i];
+    const V3 s = {F[8], F[9], F[10]}, sv = {F[3] * F[4], F[3] * F[5], F[3] * F[6]};
+    g[i] = detail::dot(s, n[i]) + detail::dot(sv, f[i]);
     if (i > 0) {
-      const Vec3 f_p = detail::mul(k.R_PC[i], f[i]);
+      const V3 f_p = detail::mul(k.R_PC[i], f[i]);
       f[i - 1] += f_p;
-      n[i - 1] += detail::mul(k.R_PC[i], n[i]) + k.p_PC[i].cross(f_p);
+      n[i - 1] += detail::mul(k.R_PC[i], n[i]) + detail::cross(detail::v3(k.p_PC[i]), f_p);
     }
   }
 }
@@ -349,28 +393,29 @@ bool forward_dynamics(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, 
 }
 
 double energy(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd) noexcept {
+  using namespace detail;
   ArmKinematics k;
   arm_kinematics(a, q, k);
-  const Vec3 g(a.gravity[0], a.gravity[1], a.gravity[2]);
+  Bodies B;
+  bodies(a, B);
+  const V3 g = {a.gravity[0], a.gravity[1], a.gravity[2]};
 
   // kinetic ½ vᵀ I v per body from the body velocities (equal to ½ qdᵀ M qd, without forming
-  // M); potential from each CoM placed in the base frame
+  // M); potential −g·(m c) with each CoM placed in the base frame
   double e = 0.0;
-  Vec3 w = Vec3::Zero(), v = Vec3::Zero();
+  V3 w = {0.0, 0.0, 0.0}, v = w;
   Mat3 R_B = Mat3::Identity();
   Vec3 p_B = Vec3::Zero();
   for (int i = 0; i < URT_NJ; ++i) {
-    Body b;
-    detail::body(a, i, b);
+    const Body& b = B.b[i];
     const Mat3& R = k.R_PC[i];
-    const Vec3& p = k.p_PC[i];
-    v = detail::tmul(R, v - p.cross(w)) + b.sv * qd[i];
-    w = detail::tmul(R, w) + b.s * qd[i];
-    e += 0.5 * (w.dot(detail::mul(b.I_o, w)) + b.m * v.squaredNorm()) + w.dot(b.h.cross(v));
+    v = tmul(R, v - cross(v3(k.p_PC[i]), w)) + qd[i] * b.sv;
+    w = tmul(R, w) + qd[i] * b.s;
+    e += 0.5 * (dot(w, mul(b.I_o, w)) + b.m * dot(v, v)) + dot(w, cross(b.h, v));
 
-    p_B += R_B * p;
+    p_B += R_B * k.p_PC[i];
     R_B = R_B * R;
-    e -= g.dot(b.m * p_B + R_B * b.h);
+    e -= dot(g, b.m * v3(p_B) + mul(R_B, b.h));
   }
   return e;
 }

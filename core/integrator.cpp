@@ -32,18 +32,19 @@ struct JointW {
   double c1;           // δT_net = c0 + c1 k_q̇
 };
 
-void joint_w_init(const urt_model_t* m, int j, int kind, const double* x, int active_set,
-                  JointW* w) noexcept {
+// From the rates just evaluated at the (sub)step's start: aux gives the active set and the
+// friction partials there.
+void joint_w_init(const urt_model_t* m, int j, int kind, const JointAux& aux, JointW* w) noexcept {
   const urt_integrator_tables* tab = m->tables;
   const urt_friction_params_t& fp = m->friction[j];
-  w->tab = &tab->t[j][kind][active_set];
+  w->tab = &tab->t[j][kind][aux.active_set];
   w->engaged = m->drives_engaged;
   w->gh = kGamma * tab->h[kind];
   w->k_cs = m->gear[j].k_cs;
   w->c_cs = m->gear[j].c_cs;
 
   // LuGre linearisation: T_f = σ0 z + σ1 ż, ż = q̇ − σ0 |q̇| z / g
-  urt_friction_out_t fr = urt_friction_eval(&fp, x[URT_X_QD], x[URT_X_Z]);
+  const urt_friction_out_t& fr = aux.fr;
   w->a_zz = fr.ddz_dz;
   w->f_z = w->gh * fr.ddz_dqd / (1.0 - w->gh * fr.ddz_dz);
   w->t_z = fp.enabled ? fp.sigma0 + fp.sigma1 * fr.ddz_dz : 0.0;
@@ -124,40 +125,36 @@ void external_torque(const urt_model_t* m, const urt_data_t* d, Vec6& tau) noexc
   tau.noalias() = J.transpose() * w;
 }
 
-// The arm's accelerations for the macro joints given the joint torques, with the
-// sub-stepped joints' accelerations prescribed. Rows and columns of prescribed joints are
-// replaced by identity in Mm so that one 6×6 Cholesky serves (the macro block stays SPD).
-void arm_accel(const urt_model_t* m, const double (*x)[URT_NXJ], const Vec6& tau,
-               const Vec6& qdd_pres, Mat6* mm_out, Vec6& qdd) noexcept {
+// The arm's accelerations for the macro joints given the joint torques, M(q) and the bias
+// h = C q̇ + g at q̈ = 0, with the sub-stepped joints' accelerations prescribed. Rows and
+// columns of prescribed joints are replaced by identity in M so that one 6×6 Cholesky serves
+// (the macro block stays SPD); mass is overwritten with that masked matrix.
+void arm_accel(const urt_model_t* m, const Vec6& tau, const Vec6& qdd_pres, Mat6& mass,
+               const Vec6& h0, Vec6& qdd) noexcept {
   const urt_integrator_tables* tab = m->tables;
-  Vec6 q, qd, qdd_known, bias;
+  Vec6 qdd_known;
   for (int j = 0; j < URT_NJ; j++) {
-    q[j] = x[j][URT_X_Q];
-    qd[j] = x[j][URT_X_QD];
     qdd_known[j] = tab->substepped[j] ? qdd_pres[j] : 0.0;
   }
-  Mat6 mm;
-  crba(m->arm, q, mm);
-  rnea(m->arm, q, qd, qdd_known, bias);
-  Vec6 rhs = tau - bias;
+  Vec6 rhs = tau - h0 - mass * qdd_known;
   for (int j = 0; j < URT_NJ; j++) {
     if (tab->substepped[j]) {
-      mm.row(j).setZero();
-      mm.col(j).setZero();
-      mm(j, j) = 1.0;
+      mass.row(j).setZero();
+      mass.col(j).setZero();
+      mass(j, j) = 1.0;
       rhs[j] = qdd_pres[j];
     }
   }
-  qdd = mm.llt().solve(rhs);
-  if (mm_out) {
-    *mm_out = mm;
-  }
+  qdd = mass.llt().solve(rhs);
 }
 
 // f(t_n + s, X) for the macro joints (all 21 rates) and q, q̇ rates of the sub-stepped ones.
+// mass and h0: M and the q̈ = 0 bias at x when the caller has them (have_arm), else computed
+// here; on return mass is the masked matrix of arm_accel.
 void macro_rates(const urt_model_t* m, const urt_data_t* d, double s,
                  const double (*x)[URT_NXJ], const Vec6& tau_ext, const Vec6& qdd_pres,
-                 double (*f)[URT_NXJ], JointAux* aux, Mat6* mm) noexcept {
+                 double (*f)[URT_NXJ], JointAux* aux, bool have_arm, Mat6& mass,
+                 Vec6& h0) noexcept {
   const urt_integrator_tables* tab = m->tables;
   Vec6 tau;
   for (int j = 0; j < URT_NJ; j++) {
@@ -169,11 +166,54 @@ void macro_rates(const urt_model_t* m, const urt_data_t* d, double s,
     }
     tau[j] = joint_rates(m, d, j, s, x[j], f[j], &aux[j]) + tau_ext[j];
   }
+  if (!have_arm) {
+    Vec6 q, qd;
+    for (int j = 0; j < URT_NJ; j++) {
+      q[j] = x[j][URT_X_Q];
+      qd[j] = x[j][URT_X_QD];
+    }
+    mass_and_bias(m->arm, q, qd, mass, h0);
+  }
   Vec6 qdd;
-  arm_accel(m, x, tau, qdd_pres, mm, qdd);
+  arm_accel(m, tau, qdd_pres, mass, h0, qdd);
   for (int j = 0; j < URT_NJ; j++) {
     f[j][URT_X_QD] = qdd[j];
   }
+}
+
+// Adds γh B_q̇ + (γh)² B_q to the W matrix of the arm rows and returns B_q (the q rows enter
+// the right-hand side too: k_q = r_q + γh k_q̇). Sub-stepped joints keep identity rows.
+void arm_linearisation(const urt_model_t* m, const double (*x)[URT_NXJ],
+                       const double (*f)[URT_NXJ], Mat6& bq, Mat6& wmat, double gh) noexcept {
+  const urt_integrator_tables* tab = m->tables;
+  Vec6 q, qd, a, t0, t1;
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = x[j][URT_X_Q];
+    qd[j] = x[j][URT_X_QD];
+    a[j] = f[j][URT_X_QD];
+  }
+  Mat6 bqd;
+  rnea(m->arm, q, qd, a, t0);
+  for (int c = 0; c < URT_NJ; c++) {
+    double eq = 1e-7 * (1.0 + std::fabs(q[c])), ev = 1e-7 * (1.0 + std::fabs(qd[c]));
+    Vec6 qp = q;
+    qp[c] += eq;
+    rnea(m->arm, qp, qd, a, t1);
+    bq.col(c) = (t1 - t0) / eq;
+    Vec6 qdp = qd;
+    qdp[c] += ev;
+    rnea(m->arm, q, qdp, a, t1);
+    bqd.col(c) = (t1 - t0) / ev;
+  }
+  for (int j = 0; j < URT_NJ; j++) {
+    if (tab->substepped[j]) {
+      bq.row(j).setZero();
+      bq.col(j).setZero();
+      bqd.row(j).setZero();
+      bqd.col(j).setZero();
+    }
+  }
+  wmat.noalias() += gh * bqd + (gh * gh) * bq;
 }
 
 //---- sub-stepped joints ----
@@ -202,7 +242,7 @@ void substep_joint(const urt_model_t* m, urt_data_t* d, int p, double m_pp, doub
 
     // stage 1 at the sub-step's start, where W is frozen
     sub_rates(m, d, p, s, x, m_pp, b, tau_ext, f, &aux);
-    joint_w_init(m, p, kSub, x, aux.active_set, &w);
+    joint_w_init(m, p, kSub, aux, &w);
     double den = m_pp - w.gh * w.c1;
     drive_ft(w, d->cmd, p, s, ft);
     for (int i = 0; i < URT_NXJ; i++) {
@@ -248,28 +288,33 @@ void integrator_step(const urt_model_t* m, urt_data_t* d) noexcept {
   for (int p = 0; p < URT_NJ; p++) {
     any_sub = any_sub || tab->substepped[p];
   }
-  if (any_sub) {
-    Vec6 q, qd, qdd_prev, bias;
-    Mat6 mass;
+  // the arm at x_n, once for the sub-steps and the macro step's first stage
+  Mat6 mass_n;
+  Vec6 h_n;
+  {
+    Vec6 q, qd;
     for (int j = 0; j < URT_NJ; j++) {
       q[j] = x[j][URT_X_Q];
       qd[j] = x[j][URT_X_QD];
+    }
+    mass_and_bias(m->arm, q, qd, mass_n, h_n);
+  }
+  if (any_sub) {
+    Vec6 qdd_prev;
+    for (int j = 0; j < URT_NJ; j++) {
       qdd_prev[j] = tab->substepped[j] ? 0.0 : d->qdd_prev[j];
     }
-    crba(m->arm, q, mass);
     for (int p = 0; p < URT_NJ; p++) {
       if (!tab->substepped[p]) {
         continue;
       }
-      Vec6 qdd_other = qdd_prev;
-      qdd_other[p] = 0.0;
-      rnea(m->arm, q, qd, qdd_other, bias);
+      double bias_p = h_n[p] + mass_n.row(p).dot(qdd_prev);
       double qd0 = x[p][URT_X_QD];
       double q0 = x[p][URT_X_Q];
       double z0 = x[p][URT_X_Z];
       double drive0[URT_NXD];
       std::memcpy(drive0, x[p], sizeof drive0);
-      substep_joint(m, d, p, mass(p, p), bias[p], tau_ext[p]);
+      substep_joint(m, d, p, mass_n(p, p), bias_p, tau_ext[p]);
       qdd_pres[p] = (x[p][URT_X_QD] - qd0) / h;
 
       // the macro step integrates this joint's q, q̇ again from t_n with the mean
@@ -291,8 +336,8 @@ void integrator_step(const urt_model_t* m, urt_data_t* d) noexcept {
   JointW w[URT_NJ];
   VecD a_d[URT_NJ];
   double e_z[URT_NJ];
-  Mat6 mm;
-  macro_rates(m, d, 0.0, x, tau_ext, qdd_pres, f, aux, &mm);
+  Mat6 mm = mass_n;
+  macro_rates(m, d, 0.0, x, tau_ext, qdd_pres, f, aux, true, mm, h_n);
 
   Mat6 wmat = mm;
   const double gh = kGamma * h;
@@ -301,43 +346,21 @@ void integrator_step(const urt_model_t* m, urt_data_t* d) noexcept {
       std::memset(ft[j], 0, sizeof ft[j]);
       continue;
     }
-    joint_w_init(m, j, kMacro, x[j], aux[j].active_set, &w[j]);
+    joint_w_init(m, j, kMacro, aux[j], &w[j]);
     wmat(j, j) -= gh * w[j].c1;
     drive_ft(w[j], d->cmd, j, 0.0, ft[j]);
     d->isat_count += (aux[j].active_set & kCurrentSat) != 0;
     d->vsat_count += (aux[j].active_set & kVoltageSat) != 0;
   }
-#ifdef URT_ARM_JAC
-  // experiment: the arm's own linearisation, B_q = ∂(rnea)/∂q, B_q̇ = ∂(rnea)/∂q̇ at x_n
-  Mat6 bq = Mat6::Zero(), bqd = Mat6::Zero();
-  {
-    Vec6 q, qd, a, t0, t1;
-    for (int j = 0; j < URT_NJ; j++) {
-      q[j] = x[j][URT_X_Q];
-      qd[j] = x[j][URT_X_QD];
-      a[j] = f[j][URT_X_QD];
-    }
-    rnea(m->arm, q, qd, a, t0);
-    for (int c = 0; c < URT_NJ; c++) {
-      double e = 1e-7;
-      Vec6 qp = q; qp[c] += e;
-      rnea(m->arm, qp, qd, a, t1);
-      bq.col(c) = (t1 - t0) / e;
-      Vec6 qdp = qd; qdp[c] += e;
-      rnea(m->arm, q, qdp, a, t1);
-      bqd.col(c) = (t1 - t0) / e;
-    }
-    for (int j = 0; j < URT_NJ; j++) {
-      if (tab->substepped[j]) {
-        bq.row(j).setZero(); bq.col(j).setZero(); bqd.row(j).setZero(); bqd.col(j).setZero();
-      }
-    }
-    wmat += gh * bqd + gh * gh * bq;
+  // the arm's own linearisation B_q = ∂τ_id/∂q, B_q̇ = ∂τ_id/∂q̇ (inverse dynamics at the
+  // stage-1 accelerations). With the drives engaged their stiffness dominates W and this adds
+  // nothing measurable; with free joints the gyroscopic terms of a fast wrist need it
+  // (energy drift 1.7e-4 → 8e-6 over a 10 s free swing). Finite differences of RNEA: 12 calls.
+  Mat6 bq = Mat6::Zero();
+  if (!m->drives_engaged) {
+    arm_linearisation(m, x, f, bq, wmat, gh);
   }
   Eigen::PartialPivLU<Mat6> wfac(wmat);
-#else
-  Eigen::LLT<Mat6> wfac(wmat);
-#endif
 
   // one stage solve: per-joint reduction, the 6×6 arm system, back-substitution
   auto solve = [&](double (*rr)[URT_NXJ], double (*k)[URT_NXJ]) {
@@ -349,11 +372,13 @@ void integrator_step(const urt_model_t* m, urt_data_t* d) noexcept {
       }
     }
     Vec6 rhs = mm * rqd + gh * c0;
-#ifdef URT_ARM_JAC
-    Vec6 rq;
-    for (int j = 0; j < URT_NJ; j++) rq[j] = rr[j][URT_X_Q];
-    rhs -= gh * bq * rq;
-#endif
+    if (!m->drives_engaged) {
+      Vec6 rq;
+      for (int j = 0; j < URT_NJ; j++) {
+        rq[j] = rr[j][URT_X_Q];
+      }
+      rhs.noalias() -= gh * bq * rq;
+    }
     Vec6 kqd = wfac.solve(rhs);
     for (int j = 0; j < URT_NJ; j++) {
       if (tab->substepped[j]) {
@@ -379,7 +404,9 @@ void integrator_step(const urt_model_t* m, urt_data_t* d) noexcept {
       x2[j][i] = x[j][i] + h * k1[j][i];
     }
   }
-  macro_rates(m, d, h, x2, tau_ext, qdd_pres, f, aux, nullptr);
+  Mat6 mass_2;
+  Vec6 h_2;
+  macro_rates(m, d, h, x2, tau_ext, qdd_pres, f, aux, false, mass_2, h_2);
   for (int j = 0; j < URT_NJ; j++) {
     for (int i = 0; i < URT_NXJ; i++) {
       r[j][i] = f[j][i] - 2.0 * k1[j][i] - gh * ft[j][i];

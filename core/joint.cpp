@@ -110,10 +110,10 @@ JointInput joint_input(const urt_model_t* m, const urt_data_t* d, int j, double 
 double joint_rates(const urt_model_t* m, const urt_data_t* d, int j, double s, const double* x,
                    double* f, JointAux* aux) noexcept {
   drive_rhs(m, j, x, joint_input(m, d, j, s), kNatural, f, aux);
-  urt_friction_out_t fr = urt_friction_eval(&m->friction[j], x[URT_X_QD], x[URT_X_Z]);
+  aux->fr = urt_friction_eval(&m->friction[j], x[URT_X_QD], x[URT_X_Z]);
   f[URT_X_Q] = x[URT_X_QD];
-  f[URT_X_Z] = fr.dz;
-  return aux->t_cs - fr.t_f;
+  f[URT_X_Z] = aux->fr.dz;
+  return aux->t_cs - aux->fr.t_f;
 }
 
 }  // namespace urt::core

@@ -5,6 +5,7 @@
 #define URT_CORE_JOINT_HPP
 
 #include "urt/data.h"
+#include "urt/drivers/friction.h"
 #include "urt/model.h"
 
 namespace urt::core {
@@ -37,6 +38,7 @@ struct JointAux {
   double v_sup;     // motor voltage [V]
   double i_fb, qdm_fb, q_fb;  // measurements [A, rad/s, rad]
   int active_set;   // ActiveSet the state is in
+  urt_friction_out_t fr;  // friction torque, bristle rate and partials (joint_rates only)
 };
 
 // Rates of the 18 drive-block states (rows 0..17 of f). With forced = kNatural the saturations

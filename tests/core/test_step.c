@@ -164,21 +164,22 @@ static void test_step__settled_current_equals_gravity_over_kt_ratio_without_fric
                                    {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}};
   double worst = 0.0;
   for (int p = 0; p < 5; p++) {
-    // a 1 s cosine blend from where the arm is to the pose, then 0.5 s to settle
+    // a 2 s cosine blend from where the arm is to the pose, then 0.5 s to settle
+    const double tm = 2.0;
     double from[URT_NJ];
     for (int j = 0; j < URT_NJ; j++) {
       from[j] = d->x[j][URT_X_Q];
     }
-    int n_move = (int)lround(1.0 / m->dt), n_hold = (int)lround(0.5 / m->dt);
+    int n_move = (int)lround(tm / m->dt), n_hold = (int)lround(0.5 / m->dt);
     for (int k = 0; k < n_move + n_hold; k++) {
       urt_command_t c;
       memset(&c, 0, sizeof c);
-      double s = fmin(k * m->dt, 1.0);
+      double s = fmin(k * m->dt / tm, 1.0), w = M_PI / tm;
       for (int j = 0; j < URT_NJ; j++) {
         double dq = poses[p][j] - from[j];
         c.q[j] = from[j] + dq * 0.5 * (1.0 - cos(M_PI * s));
-        c.qd[j] = k < n_move ? dq * 0.5 * M_PI * sin(M_PI * s) : 0.0;
-        c.qdd[j] = k < n_move ? dq * 0.5 * M_PI * M_PI * cos(M_PI * s) : 0.0;
+        c.qd[j] = k < n_move ? dq * 0.5 * w * sin(M_PI * s) : 0.0;
+        c.qdd[j] = k < n_move ? dq * 0.5 * w * w * cos(M_PI * s) : 0.0;
       }
       assert_int_equal(urt_command_set(m, d, &c), 0);
       assert_int_equal(urt_step(m, d), 0);
