@@ -68,7 +68,8 @@ inline void body(const urt_arm_params_t& a, int i, Body& b) noexcept {
 
   // joint i turns about ẑ of the parent frame, through its origin. In frame i+1 that axis is
   // s = R_Fᵀ ẑ (row 2 of R_F), and the origin sits at p* = R_Fᵀ (t_F + d ẑ) from it, so the
-  // motion subspace is S = (s; s × p*); with t_F = a x̂ (eq. 8) this is (s; a · row 1 of R_F)
+  // motion subspace is S = (s; s × p*). urt_arm_prepare writes t_F = a x̂ (eq. 8), which
+  // makes s × p* = a (row 2 × row 0 of R_F) = a · row 1 of R_F
   b.s = {F[8], F[9], F[10]};
   b.sv = {F[3] * F[4], F[3] * F[5], F[3] * F[6]};
 
@@ -346,7 +347,7 @@ void gravity(const urt_arm_params_t& a, const Vec6& q, Vec6& g) noexcept {
     n[i] = detail::cross(V3{l.com[0], l.com[1], l.com[2]}, f[i]);
   }
   for (int i = URT_NJ - 1; i >= 0; --i) {
-    const double* F = a.fixed[i];
+    const double* F = a.fixed[i];  // the motion subspace as in detail::body
     const V3 s = {F[8], F[9], F[10]}, sv = {F[3] * F[4], F[3] * F[5], F[3] * F[6]};
     g[i] = detail::dot(s, n[i]) + detail::dot(sv, f[i]);
     if (i > 0) {
@@ -369,14 +370,19 @@ void crba(const urt_arm_params_t& a, const Vec6& q, Mat6& M) noexcept {
   crba(a, k, M);
 }
 
-void mass_and_bias(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, Mat6& M,
+void mass_and_bias(const urt_arm_params_t& a, const ArmKinematics& k, const Vec6& qd, Mat6& M,
                    Vec6& bias) noexcept {
-  ArmKinematics k;
-  arm_kinematics(a, q, k);
   detail::Bodies B;
   detail::bodies(a, B);
   detail::crba(B, k, M);
   detail::rnea(a, B, k, qd, Vec6::Zero(), bias);
+}
+
+void mass_and_bias(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, Mat6& M,
+                   Vec6& bias) noexcept {
+  ArmKinematics k;
+  arm_kinematics(a, q, k);
+  mass_and_bias(a, k, qd, M, bias);
 }
 
 bool forward_dynamics(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, const Vec6& tau,

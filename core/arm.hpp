@@ -13,9 +13,14 @@
 // motion subspace S_i = (s_i; a_i R_F^T ŷ) are constant (R_F = Rot(x, α) Rot(y, β)), so
 // only the 6 link transforms depend on q. A spatial motion (ω; v) has v = velocity of the
 // body point at the frame origin; a spatial force (n; f) has n = moment about the origin.
-// Gravity enters RNEA as a base acceleration −g.
+// Gravity enters RNEA as a base acceleration −g. Every function reads the derived fields of
+// urt_arm_params_t, so urt_arm_prepare() must have run.
 //
-// Everything here is fixed-size Eigen on the stack: no heap, no exceptions. Context: RT.
+// Everything here lives on the stack (fixed-size Eigen, plain arrays inside): no heap, no
+// exceptions. Context: RT. Cost per call at -O2 on the dev machine (AMD EPYC, shared):
+// arm_kinematics 80 ns (six sincos), rnea 245 ns, gravity 125 ns, crba 290 ns,
+// mass_and_bias 470 ns, forward_dynamics 550 ns, jacobian 170 ns. Calls that share q
+// should share the ArmKinematics (the overloads below take one).
 #ifndef URT_CORE_ARM_HPP
 #define URT_CORE_ARM_HPP
 
@@ -63,6 +68,8 @@ void crba(const urt_arm_params_t& a, const ArmKinematics& k, Mat6& M) noexcept;
 // M(q) and the bias torque b = C(q, qd) qd + g(q) from one set of link transforms: what a
 // step needs to form qdd = M⁻¹ (tau − b).
 void mass_and_bias(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, Mat6& M,
+                   Vec6& bias) noexcept;
+void mass_and_bias(const urt_arm_params_t& a, const ArmKinematics& k, const Vec6& qd, Mat6& M,
                    Vec6& bias) noexcept;
 
 // Forward dynamics qdd = M⁻¹ (tau − C qd − g) by Cholesky of M. Returns false (qdd NaN) if M

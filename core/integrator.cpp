@@ -300,15 +300,16 @@ void integrator_step(const urt_model_t* m, urt_data_t* d) noexcept {
     mass_and_bias(m->arm, q, qd, mass_n, h_n);
   }
   if (any_sub) {
-    Vec6 qdd_prev;
-    for (int j = 0; j < URT_NJ; j++) {
-      qdd_prev[j] = tab->substepped[j] ? 0.0 : d->qdd_prev[j];
-    }
     for (int p = 0; p < URT_NJ; p++) {
       if (!tab->substepped[p]) {
         continue;
       }
-      double bias_p = h_n[p] + mass_n.row(p).dot(qdd_prev);
+      // every other joint, sub-stepped or not, pushes through M_pk with its last mean q̈
+      Vec6 qdd_other;
+      for (int j = 0; j < URT_NJ; j++) {
+        qdd_other[j] = j == p ? 0.0 : d->qdd_prev[j];
+      }
+      double bias_p = h_n[p] + mass_n.row(p).dot(qdd_other);
       double qd0 = x[p][URT_X_QD];
       double q0 = x[p][URT_X_Q];
       double z0 = x[p][URT_X_Z];

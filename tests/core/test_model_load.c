@@ -164,7 +164,7 @@ static void test_model_load__loads_ur5_in_si_units(void **state) {
   assert_true(m->seed == 1);
   assert_int_equal(m->drives_engaged, 1);
   assert_near(m->substep_h_max, 1e-5, 0.0);
-  assert_near(m->substep_ratio, 0.05, 0.0);
+  assert_near(m->substep_ratio, 0.02, 0.0);
 
   // arm: Table 4 mm/deg converted to m/rad, Table 5 with the link-1 ×1e-4 restored
   assert_near(m->arm.link[0].a, 0.110e-3, 1e-15);

@@ -44,7 +44,7 @@ def link_tail(link):
 
 
 def build_pinocchio(params):
-    """Pinocchio model of the arm, and the ids of the flange and TCP frames."""
+    """Pinocchio model of the arm, and the id of its TCP frame."""
     arm = params["arm"]
     model = pin.Model()
     model.gravity = pin.Motion(np.array(arm["gravity"], dtype=float), np.zeros(3))
@@ -60,14 +60,13 @@ def build_pinocchio(params):
         model.appendBodyToJoint(joint, tail.act(body), pin.SE3.Identity())
         parent = joint
     tcp = np.array(arm["tcp"], dtype=float)
-    flange = model.addFrame(pin.Frame("flange", parent, tail, pin.FrameType.OP_FRAME))
     tcp_frame = model.addFrame(
         pin.Frame("tcp", parent, tail * pin.SE3(pin.exp3(tcp[3:]), tcp[:3]),
                   pin.FrameType.OP_FRAME))
-    return model, flange, tcp_frame
+    return model, tcp_frame
 
 
-# the bare flange of config/ur5.yaml, and a tool 15 cm out with a 2.4 rad rotation
+# the bare flange of config/ur5.yaml, and a tool 15 cm out, turned by 2.35 rad
 TOOL = [0.01, -0.02, 0.15, 0.3, -1.2, 2.0]
 VARIANTS = {"bare_flange": ((), [0.0] * 6),
             "tool": ((f"arm.tcp=[{', '.join(map(repr, TOOL))}]",), TOOL)}
@@ -79,10 +78,10 @@ def arm(request, urtwin_lib, ur5_params):
     overrides, tcp = VARIANTS[request.param]
     params = urt.resolved_model(urt.UR5_YAML, overrides) if overrides else ur5_params
     assert params["arm"]["tcp"] == pytest.approx(tcp, abs=1e-15)
-    model, flange, tcp = build_pinocchio(params)
+    model, tcp_frame = build_pinocchio(params)
     with urt.Model(urtwin_lib, urt.UR5_YAML, overrides) as ours:
         yield types.SimpleNamespace(urt=ours, params=params, model=model,
-                                    data=model.createData(), flange=flange, tcp=tcp)
+                                    data=model.createData(), tcp=tcp_frame)
 
 
 @pytest.fixture(scope="module")
