@@ -53,9 +53,10 @@ test: test-unit test-asan test-python
 test-unit: build
 	ctest --test-dir build --output-on-failure -j $(JOBS)
 
+# the CVODE comparison is left to the release run: under ASan it would take most of an hour
 test-asan: build-asan
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --test-dir build-asan --output-on-failure -j $(JOBS)
+	  ctest --test-dir build-asan --output-on-failure -j $(JOBS) -E '^reference/'
 
 test-python: build
 	URT_BUILD=$(abspath build) $(PY) -m pytest -q tests/python
