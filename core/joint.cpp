@@ -3,8 +3,6 @@
 // the sensor filters. Equations live in the drivers' headers; this file only wires them.
 #include "joint.hpp"
 
-#include <cmath>
-
 #include "urt/data.h"
 #include "urt/drivers/friction.h"
 
@@ -13,65 +11,62 @@ namespace urt::core {
 void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& in, int forced,
                double* f, JointAux* aux) noexcept {
   const urt_pi_cascade_params_t& pc = m->control[j];
-  const urt_motor_params_t& mp = m->motor[j];
   const urt_harmonic_drive_params_t& gp = m->gear[j];
-  const urt_sensors_params_t& sp = m->sensors[j];
+
+  // the drivers' states, gathered from the joint's slice of x
+  urt_motor_state_t ms = {x[URT_X_I], x[URT_X_QM], x[URT_X_QDM]};
+  urt_pi_cascade_state_t cs = {x[URT_X_XI_V], x[URT_X_XI_C]};
+  urt_harmonic_drive_state_t gs = {x[URT_X_QWG], x[URT_X_QDWG], x[URT_X_XFS], x[URT_X_XDFS],
+                                   x[URT_X_YFS], x[URT_X_YDFS], x[URT_X_QCS], x[URT_X_QDCS]};
+  urt_sensors_state_t ss = {x[URT_X_I_F], x[URT_X_W], x[URT_X_WD], x[URT_X_P], x[URT_X_PD]};
 
   // measurements: continuous filter outputs plus the held error of this sample
-  double i_fb = x[URT_X_I_F] + in.eps_i;
-  double qdm_fb = x[URT_X_W] + in.eps_w;
-  double q_fb = x[URT_X_P] + in.eps_q;
+  double i_fb = ss.i_f + in.eps_i;
+  double qdm_fb = ss.w + in.eps_w;
+  double q_fb = ss.p + in.eps_q;
 
   // controller: natural saturations, or forced ones for the tables
-  urt_pi_cascade_in_t ci = {in.q_set, in.qd_set, in.i_ff, q_fb, qdm_fb, i_fb,
-                            x[URT_X_XI_V], x[URT_X_XI_C]};
+  urt_pi_cascade_in_t ci = {in.q_set, in.qd_set, in.i_ff, q_fb, qdm_fb, i_fb};
   urt_pi_cascade_out_t co;
   if (forced == kNatural) {
-    co = urt_pi_cascade_eval(&pc, gp.ratio, &ci);
+    co = urt_pi_cascade_eval(&pc, gp.ratio, &cs, &ci);
   } else {
     // affine in x: saturated signals become constants, held integrators get zero rates
     co.qdm_ref = pc.p_pos * (in.q_set - q_fb) + gp.ratio * in.qd_set;
     double e_v = co.qdm_ref - qdm_fb;
     co.i_sat = (forced & kCurrentSat) != 0;
-    co.i_ref = co.i_sat ? pc.i_max : pc.p_vel * e_v + pc.i_vel * x[URT_X_XI_V] + in.i_ff;
-    co.dxi_v = co.i_sat ? 0.0 : e_v;
+    co.i_ref = co.i_sat ? pc.i_max : pc.p_vel * e_v + pc.i_vel * cs.xi_v + in.i_ff;
+    co.d.xi_v = co.i_sat ? 0.0 : e_v;
     double e_c = co.i_ref - i_fb;
     co.v_sat = (forced & kVoltageSat) != 0;
-    co.v_sup = co.v_sat ? pc.v_net : pc.p_cur * e_c + pc.i_cur * x[URT_X_XI_C];
-    co.dxi_c = co.v_sat ? 0.0 : e_c;
+    co.v_sup = co.v_sat ? pc.v_net : pc.p_cur * e_c + pc.i_cur * cs.xi_c;
+    co.d.xi_c = co.v_sat ? 0.0 : e_c;
   }
 
-  // gear, with the arm's joint angle on its output side
-  urt_harmonic_drive_in_t gi = {x[URT_X_QM],  x[URT_X_QDM],  x[URT_X_QWG], x[URT_X_QDWG],
-                                x[URT_X_XFS], x[URT_X_XDFS], x[URT_X_YFS], x[URT_X_YDFS],
-                                x[URT_X_QCS], x[URT_X_QDCS], x[URT_X_Q],   x[URT_X_QD]};
-  urt_harmonic_drive_out_t go = urt_harmonic_drive_eval(&gp, &gi);
-
-  // motor
-  urt_motor_deriv_t md = urt_motor_deriv(&mp, x[URT_X_I], x[URT_X_QDM], co.v_sup, go.t_in);
-
-  // sensor filters (continuous; model.md §5.3c)
-  double tau_i = 1.0 / (2.0 * M_PI * sp.f_i);
-  double w_w = 2.0 * M_PI * sp.f_w, w_q = 2.0 * M_PI * sp.f_q;
+  // gear between the motor and the arm's joint angle, then the motor, then the sensors
+  urt_harmonic_drive_ends_t ge = {ms.q_m, ms.qd_m, x[URT_X_Q], x[URT_X_QD]};
+  urt_harmonic_drive_out_t go = urt_harmonic_drive_eval(&gp, &gs, &ge);
+  urt_motor_deriv_t md = urt_motor_deriv(&m->motor[j], &ms, co.v_sup, go.t_in);
+  urt_sensors_state_t sd = urt_sensors_deriv(&m->sensors[j], &ss, ms.i, ms.qd_m, x[URT_X_Q]);
 
   f[URT_X_I] = md.di;
-  f[URT_X_XI_C] = co.dxi_c;
-  f[URT_X_I_F] = (x[URT_X_I] - x[URT_X_I_F]) / tau_i;
-  f[URT_X_QM] = x[URT_X_QDM];
+  f[URT_X_XI_C] = co.d.xi_c;
+  f[URT_X_I_F] = sd.i_f;
+  f[URT_X_QM] = md.dq;
   f[URT_X_QDM] = md.dqd;
-  f[URT_X_QWG] = x[URT_X_QDWG];
-  f[URT_X_QDWG] = go.qdd_wg;
-  f[URT_X_XFS] = x[URT_X_XDFS];
-  f[URT_X_XDFS] = go.xdd_fs;
-  f[URT_X_YFS] = x[URT_X_YDFS];
-  f[URT_X_YDFS] = go.ydd_fs;
-  f[URT_X_QCS] = x[URT_X_QDCS];
-  f[URT_X_QDCS] = go.qdd_cs;
-  f[URT_X_XI_V] = co.dxi_v;
-  f[URT_X_W] = x[URT_X_WD];
-  f[URT_X_WD] = w_w * w_w * (x[URT_X_QDM] - x[URT_X_W]) - 2.0 * sp.zeta_w * w_w * x[URT_X_WD];
-  f[URT_X_P] = x[URT_X_PD];
-  f[URT_X_PD] = w_q * w_q * (x[URT_X_Q] - x[URT_X_P]) - 2.0 * sp.zeta_q * w_q * x[URT_X_PD];
+  f[URT_X_QWG] = go.d.q_wg;
+  f[URT_X_QDWG] = go.d.qd_wg;
+  f[URT_X_XFS] = go.d.x_fs;
+  f[URT_X_XDFS] = go.d.xd_fs;
+  f[URT_X_YFS] = go.d.y_fs;
+  f[URT_X_YDFS] = go.d.yd_fs;
+  f[URT_X_QCS] = go.d.q_cs;
+  f[URT_X_QDCS] = go.d.qd_cs;
+  f[URT_X_XI_V] = co.d.xi_v;
+  f[URT_X_W] = sd.w;
+  f[URT_X_WD] = sd.wd;
+  f[URT_X_P] = sd.p;
+  f[URT_X_PD] = sd.pd;
 
   // disengaged drives (brakes released, no gear): the block holds still and passes no torque
   if (!in.drives_engaged) {
@@ -110,7 +105,8 @@ JointInput joint_input(const urt_model_t* m, const urt_data_t* d, int j, double 
 double joint_rates(const urt_model_t* m, const urt_data_t* d, int j, double s, const double* x,
                    double* f, JointAux* aux) noexcept {
   drive_rhs(m, j, x, joint_input(m, d, j, s), kNatural, f, aux);
-  aux->fr = urt_friction_eval(&m->friction[j], x[URT_X_QD], x[URT_X_Z]);
+  urt_friction_state_t fs = {x[URT_X_Z]};
+  aux->fr = urt_friction_eval(&m->friction[j], &fs, x[URT_X_QD]);
   f[URT_X_Q] = x[URT_X_QD];
   f[URT_X_Z] = aux->fr.dz;
   return aux->t_cs - aux->fr.t_f;

@@ -43,8 +43,8 @@ void outputs_drive(const urt_model_t* m, urt_data_t* d) {
     urt::core::JointAux aux;
     urt::core::drive_rhs(m, j, d->x[j], urt::core::joint_input(m, d, j, 0.0),
                          urt::core::kNatural, f, &aux);
-    urt_friction_out_t fr =
-        urt_friction_eval(&m->friction[j], d->x[j][URT_X_QD], d->x[j][URT_X_Z]);
+    urt_friction_state_t fs = {d->x[j][URT_X_Z]};
+    urt_friction_out_t fr = urt_friction_eval(&m->friction[j], &fs, d->x[j][URT_X_QD]);
     d->t_cs[j] = aux.t_cs;
     d->t_in[j] = aux.t_in;
     d->i_ref[j] = aux.i_ref;

@@ -21,7 +21,9 @@ double urt_friction_dg(const urt_friction_params_t *p, double qd) {
   return s * (stribeck + viscous);
 }
 
-urt_friction_out_t urt_friction_eval(const urt_friction_params_t *p, double qd, double z) {
+urt_friction_out_t urt_friction_eval(const urt_friction_params_t *p,
+                                     const urt_friction_state_t *s, double qd) {
+  double z = s->z;
   urt_friction_out_t out = {0.0, 0.0, 0.0, 0.0};
   if (!p->enabled) {
     return out;
@@ -37,9 +39,9 @@ urt_friction_out_t urt_friction_eval(const urt_friction_params_t *p, double qd, 
   out.ddz_dz = -p->sigma0 * r;
 
   // d(|q̇|/g)/dq̇ = sgn(q̇) [1/g − |q̇| g'(|q̇|)/g²]; |q̇|·g' stays finite at 0 although g' does not
-  double s = qd > 0.0 ? 1.0 : (qd < 0.0 ? -1.0 : 0.0);
+  double sgn = qd > 0.0 ? 1.0 : (qd < 0.0 ? -1.0 : 0.0);
   double v_dg = -p->f_c * p->k_static * (p->k_q / p->qd_s) * e * v + (2.0 / 3.0) * p->f_v * v23;
-  double dr = s * (1.0 / g - v_dg / (g * g));
+  double dr = sgn * (1.0 / g - v_dg / (g * g));
   out.ddz_dqd = 1.0 - p->sigma0 * z * dr;
 
   out.t_f = p->sigma0 * z + p->sigma1 * out.dz;

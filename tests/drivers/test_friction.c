@@ -20,7 +20,7 @@ static void test_friction__steady_sliding_gives_g_sign_v(void **state) {
   (void)state;
   double v = -0.7;
   double z = -urt_friction_g(&kWrist, v) / kWrist.sigma0;  // ż = 0
-  urt_friction_out_t o = urt_friction_eval(&kWrist, v, z);
+  urt_friction_out_t o = urt_friction_eval(&kWrist, &(urt_friction_state_t){z}, v);
   assert_near(o.dz, 0.0, 1e-12);
   assert_near(o.t_f, -urt_friction_g(&kWrist, v), 1e-9);
 }
@@ -28,11 +28,11 @@ static void test_friction__steady_sliding_gives_g_sign_v(void **state) {
 static void test_friction__partials_match_finite_differences(void **state) {
   (void)state;
   double v = 0.03, z = 1e-7, h = 1e-8;
-  urt_friction_out_t o = urt_friction_eval(&kWrist, v, z);
-  double dz_dv = (urt_friction_eval(&kWrist, v + h, z).dz -
-                  urt_friction_eval(&kWrist, v - h, z).dz) / (2 * h);
-  double dz_dz = (urt_friction_eval(&kWrist, v, z + 1e-12).dz -
-                  urt_friction_eval(&kWrist, v, z - 1e-12).dz) / 2e-12;
+  urt_friction_out_t o = urt_friction_eval(&kWrist, &(urt_friction_state_t){z}, v);
+  double dz_dv = (urt_friction_eval(&kWrist, &(urt_friction_state_t){z}, v + h).dz -
+                  urt_friction_eval(&kWrist, &(urt_friction_state_t){z}, v - h).dz) / (2 * h);
+  double dz_dz = (urt_friction_eval(&kWrist, &(urt_friction_state_t){z + 1e-12}, v).dz -
+                  urt_friction_eval(&kWrist, &(urt_friction_state_t){z - 1e-12}, v).dz) / 2e-12;
   assert_near(o.ddz_dqd, dz_dv, 1e-5 * fabs(dz_dv) + 1e-9);
   assert_near(o.ddz_dz, dz_dz, 1e-4 * fabs(dz_dz));
 }
@@ -50,7 +50,7 @@ static void test_friction__disabled_is_zero(void **state) {
   (void)state;
   urt_friction_params_t p = kWrist;
   p.enabled = 0;
-  urt_friction_out_t o = urt_friction_eval(&p, 1.0, 1e-6);
+  urt_friction_out_t o = urt_friction_eval(&p, &(urt_friction_state_t){1e-6}, 1.0);
   assert_near(o.t_f, 0.0, 0.0);
   assert_near(o.dz, 0.0, 0.0);
 }

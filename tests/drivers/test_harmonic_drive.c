@@ -46,14 +46,15 @@ static void test_harmonic_drive_equilibrium__is_static_with_ratio_101_03(void **
   assert_int_equal(urt_harmonic_drive_equilibrium(&p, 0.3, 53.81, u, &t_in), 0);
 
   // all accelerations vanish at rest and the output carries the load
-  urt_harmonic_drive_in_t in = {u[0], 0, u[1], 0, u[2], 0, u[3], 0, u[4], 0, 0.3, 0};
-  urt_harmonic_drive_out_t o = urt_harmonic_drive_eval(&p, &in);
+  urt_harmonic_drive_state_t s = {u[1], 0, u[2], 0, u[3], 0, u[4], 0};
+  urt_harmonic_drive_ends_t e = {u[0], 0, 0.3, 0};
+  urt_harmonic_drive_out_t o = urt_harmonic_drive_eval(&p, &s, &e);
   assert_near(o.t_cs, 53.81, 1e-9);
   assert_near(o.t_in, t_in, 1e-9);  // K_WG (q_M − q_WG) with q_M ≈ 30 rad: roundoff ≈ 1e-9
-  assert_near(o.qdd_wg * p.j_wg, 0.0, 1e-9);
-  assert_near(o.xdd_fs * p.m_fs, 0.0, 1e-6);
-  assert_near(o.ydd_fs * p.m_fs, 0.0, 1e-6);
-  assert_near(o.qdd_cs * p.j_cs, 0.0, 1e-9);
+  assert_near(o.d.qd_wg * p.j_wg, 0.0, 1e-9);
+  assert_near(o.d.xd_fs * p.m_fs, 0.0, 1e-6);
+  assert_near(o.d.yd_fs * p.m_fs, 0.0, 1e-6);
+  assert_near(o.d.qd_cs * p.j_cs, 0.0, 1e-9);
 
   // static ratio τ / cos²α_n (model.md §6.1 A4)
   assert_near(o.t_cs / o.t_in, 101.0297, 1e-4);

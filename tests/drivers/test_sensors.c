@@ -35,6 +35,19 @@ static void test_rng__same_seed_same_sequence_and_unit_variance(void **state) {
   assert_near(sum2 / n, 1.0, 0.02);
 }
 
+static void test_sensors_deriv__filters_rest_at_their_inputs(void **state) {
+  (void)state;
+  urt_sensors_params_t p = {20e3, 5e3, 0.7, 1e3, 0.7, 0, 0, 0, 0, 0, 0, 0, 0};
+  urt_sensors_state_t s = {1.5, 30.0, 0.0, 0.2, 0.0};
+  urt_sensors_state_t d = urt_sensors_deriv(&p, &s, 1.5, 30.0, 0.2);
+  assert_near(d.i_f, 0.0, 0.0);
+  assert_near(d.wd, 0.0, 0.0);
+  assert_near(d.pd, 0.0, 0.0);
+  // a current step is followed with the 20 kHz time constant
+  d = urt_sensors_deriv(&p, &s, 2.5, 30.0, 0.2);
+  assert_near(d.i_f, 1.0 * 2.0 * M_PI * 20e3, 1e-6);
+}
+
 static void test_rng__different_seeds_differ(void **state) {
   (void)state;
   urt_rng_t a, b;
@@ -48,6 +61,7 @@ int main(void) {
       cmocka_unit_test(test_sensors_quantise__is_mid_tread),
       cmocka_unit_test(test_sensors_held_error__is_zero_with_noise_and_quantisation_off),
       cmocka_unit_test(test_rng__same_seed_same_sequence_and_unit_variance),
+      cmocka_unit_test(test_sensors_deriv__filters_rest_at_their_inputs),
       cmocka_unit_test(test_rng__different_seeds_differ),
   };
   return cmocka_run_group_tests_name("drivers/sensors", tests, NULL, NULL);

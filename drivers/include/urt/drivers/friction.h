@@ -28,6 +28,10 @@ typedef struct urt_friction_params {
   double k_q;        /* Stribeck shape factor                 [-]          */
 } urt_friction_params_t;
 
+typedef struct urt_friction_state {
+  double z;       /* bristle deflection              [rad]      */
+} urt_friction_state_t;
+
 typedef struct urt_friction_out {
   double t_f;     /* friction torque                 [N m]      */
   double dz;      /* ż                               [rad/s]    */
@@ -41,8 +45,10 @@ double urt_friction_g(const urt_friction_params_t *p, double qd);
 /* dg/dq̇; singular at 0 (returns 0 there). Context: any. Pure. */
 double urt_friction_dg(const urt_friction_params_t *p, double qd);
 
-/* Torque, bristle rate and their partial derivatives. Context: RT. Pure. */
-urt_friction_out_t urt_friction_eval(const urt_friction_params_t *p, double qd, double z);
+/* Torque, bristle rate and their partial derivatives at joint speed qd [rad/s].
+ * Context: RT. Pure. */
+urt_friction_out_t urt_friction_eval(const urt_friction_params_t *p,
+                                     const urt_friction_state_t *s, double qd);
 
 #ifdef __cplusplus
 }

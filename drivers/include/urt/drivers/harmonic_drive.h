@@ -48,29 +48,34 @@ typedef struct urt_harmonic_drive_params {
   double sin_n, cos_n, tan_n, sin_t, cos_t; /* of α_n and α_t, so the step calls no trig   */
 } urt_harmonic_drive_params_t;
 
-/* Positions and rates of the gear's bodies, plus the motor and joint ends. */
-typedef struct urt_harmonic_drive_in {
-  double q_m, qd_m;     /* motor            [rad, rad/s] */
+/* Positions and rates of the gear's own bodies. */
+typedef struct urt_harmonic_drive_state {
   double q_wg, qd_wg;   /* wave generator   [rad, rad/s] */
   double x_fs, xd_fs;   /* flexspline x     [m, m/s]     */
   double y_fs, yd_fs;   /* flexspline y     [m, m/s]     */
   double q_cs, qd_cs;   /* circular spline  [rad, rad/s] */
+} urt_harmonic_drive_state_t;
+
+/* The motor (input) and joint (output) ends the gear is connected to. */
+typedef struct urt_harmonic_drive_ends {
+  double q_m, qd_m;     /* motor            [rad, rad/s] */
   double q, qd;         /* joint output     [rad, rad/s] */
-} urt_harmonic_drive_in_t;
+} urt_harmonic_drive_ends_t;
 
 typedef struct urt_harmonic_drive_out {
-  double t_in;   /* torque the WG takes from the motor  [N m] */
-  double t_cs;   /* torque the CS gives the joint       [N m] */
-  double qdd_wg, xdd_fs, ydd_fs, qdd_cs; /* accelerations */
+  double t_in;                     /* torque the WG takes from the motor  [N m] */
+  double t_cs;                     /* torque the CS gives the joint       [N m] */
+  urt_harmonic_drive_state_t d;    /* time derivative of the state              */
 } urt_harmonic_drive_out_t;
 
 /* Fill the derived fields from the given ones, motor inertia j_m for the WG reduced inertia.
  * Context: non-RT. */
 void urt_harmonic_drive_derive(urt_harmonic_drive_params_t *p, double j_m);
 
-/* Forces and accelerations of eq. (5). Context: RT. Pure. */
+/* Torques and the state's rates of eq. (5). Context: RT. Pure. */
 urt_harmonic_drive_out_t urt_harmonic_drive_eval(const urt_harmonic_drive_params_t *p,
-                                                 const urt_harmonic_drive_in_t *in);
+                                                 const urt_harmonic_drive_state_t *s,
+                                                 const urt_harmonic_drive_ends_t *e);
 
 /* Static equilibrium of eq. (6), augmented (model.md §1.5): given the joint angle q0 and the
  * output torque t0 the gear must carry, solve for (q_M, q_WG, x_FS, y_FS, q_CS) with all rates

@@ -22,13 +22,22 @@ typedef struct urt_motor_params {
   double ke; /* back-EMF constant k_e (= k_t)            [V s/rad] */
 } urt_motor_params_t;
 
+typedef struct urt_motor_state {
+  double i;     /* winding current       [A]     */
+  double q_m;   /* rotor angle           [rad]   */
+  double qd_m;  /* rotor speed           [rad/s] */
+} urt_motor_state_t;
+
+/* Time derivative of urt_motor_state_t, field by field. */
 typedef struct urt_motor_deriv {
-  double di;   /* di/dt    [A/s]     */
-  double dqd;  /* d²q_M/dt² [rad/s²] */
+  double di;   /* di/dt      [A/s]    */
+  double dq;   /* dq_M/dt    [rad/s]  */
+  double dqd;  /* d²q_M/dt²  [rad/s²] */
 } urt_motor_deriv_t;
 
-/* Time derivatives of the motor states. Context: RT. Pure. */
-urt_motor_deriv_t urt_motor_deriv(const urt_motor_params_t *p, double i, double qd_m,
+/* Time derivatives of the motor states for supply voltage v_sup [V] and load torque t_in
+ * [N m]. Context: RT. Pure. */
+urt_motor_deriv_t urt_motor_deriv(const urt_motor_params_t *p, const urt_motor_state_t *s,
                                   double v_sup, double t_in);
 
 #ifdef __cplusplus

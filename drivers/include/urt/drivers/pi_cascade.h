@@ -30,6 +30,12 @@ typedef struct urt_pi_cascade_params {
   double v_net;  /* supply voltage (PWM saturation)    [V]        */
 } urt_pi_cascade_params_t;
 
+/* The two integrators. */
+typedef struct urt_pi_cascade_state {
+  double xi_v;    /* speed-loop integrator ∫e_v dt     [rad]   */
+  double xi_c;    /* current-loop integrator ∫e_c dt   [A s]   */
+} urt_pi_cascade_state_t;
+
 /* Measured signals and set-points the cascade reads. */
 typedef struct urt_pi_cascade_in {
   double q_set;   /* joint position set-point          [rad]   */
@@ -38,22 +44,21 @@ typedef struct urt_pi_cascade_in {
   double q_fb;    /* joint encoder measurement          [rad]   */
   double qdm_fb;  /* motor speed measurement            [rad/s] */
   double i_fb;    /* current measurement                [A]     */
-  double xi_v;    /* speed-loop integrator state */
-  double xi_c;    /* current-loop integrator state */
 } urt_pi_cascade_in_t;
 
 typedef struct urt_pi_cascade_out {
   double qdm_ref;  /* motor speed reference            [rad/s] */
   double i_ref;    /* current reference (saturated)     [A]     */
   double v_sup;    /* supply voltage (saturated)        [V]     */
-  double dxi_v;    /* dξ_v/dt (0 while clamped)                 */
-  double dxi_c;    /* dξ_c/dt (0 while clamped)                 */
+  urt_pi_cascade_state_t d;  /* dξ_v/dt, dξ_c/dt (0 while clamped)   */
   int i_sat;       /* 1 while i_ref is saturated                */
   int v_sat;       /* 1 while V_sup is saturated                */
 } urt_pi_cascade_out_t;
 
-/* Evaluate the cascade. ratio is the gear ratio τ. Context: RT. Pure. */
+/* Evaluate the cascade: references, saturated outputs and the integrators' rates. ratio is
+ * the gear ratio τ. Context: RT. Pure. */
 urt_pi_cascade_out_t urt_pi_cascade_eval(const urt_pi_cascade_params_t *p, double ratio,
+                                         const urt_pi_cascade_state_t *s,
                                          const urt_pi_cascade_in_t *in);
 
 #ifdef __cplusplus

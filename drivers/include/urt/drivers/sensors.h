@@ -36,6 +36,19 @@ typedef struct urt_sensors_params {
   int quantise;                /* 0: no quantisation                             */
 } urt_sensors_params_t;
 
+/* The three filters' states. */
+typedef struct urt_sensors_state {
+  double i_f;      /* current-sensor output             [A]      */
+  double w, wd;    /* motor-speed filter output, rate   [rad/s, rad/s²] */
+  double p, pd;    /* joint-position filter output, rate [rad, rad/s]   */
+} urt_sensors_state_t;
+
+/* Rates of the filter states for true current i [A], motor speed qd_m [rad/s] and joint
+ * angle q [rad]. Context: RT. Pure. */
+urt_sensors_state_t urt_sensors_deriv(const urt_sensors_params_t *p,
+                                      const urt_sensors_state_t *s, double i, double qd_m,
+                                      double q);
+
 /* Mid-tread quantiser: lsb · round(x / lsb); lsb <= 0 passes x through. Context: RT. Pure. */
 double urt_sensors_quantise(double x, double lsb);
 
