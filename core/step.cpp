@@ -120,9 +120,9 @@ extern "C" void urt__step_finish(const urt_model_t* m, urt_data_t* d,
   d->t = (double)d->steps * h;
   command_advance(d, h);
 
-  // sample and hold the sensors for the next step, then the outputs they show
+  // sample and hold the sensors for the next step; the outputs that show them are computed
+  // at the rate someone reads them (urt_data_update_outputs), not at every physics step
   urt_sensors_sample(m, d);
-  outputs_drive(m, d);
 }
 
 extern "C" void urt_rhs(const urt_model_t* m, const urt_data_t* d, double s, const double* x,

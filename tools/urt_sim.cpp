@@ -514,6 +514,8 @@ int run(const Options &o, const urt_model_t *m, const urt_traj_t *tr) {
     for (Sim *s : sims) {
       s->track();
       if (s->csv.is_open() && (k % (uint64_t)o.decimate == 0 || k == nsteps)) {
+        // urt_step leaves torques, measurements and the TCP pose to the sampling rate
+        urt_data_update_outputs(m, &s->d);
         s->csv.row(s->d);
       }
     }

@@ -24,8 +24,10 @@ extern "C" {
  * tables). overrides: NULL or a NULL-terminated list of "key.path=value" strings applied to
  * the YAML tree before validation (e.g. "sensors.noise=false", "simulation.dt=1e-4").
  * Context: non-RT (reads files, allocates).
- * Returns 0, or URT_ECONFIG / URT_EIO / URT_ENOMEM. On failure *out is untouched and err (if
- * not NULL) receives "file:line: key: reason" (at most err_sz bytes). Nullable: overrides, err. */
+ * Returns 0, or URT_ECONFIG / URT_EIO / URT_ENOMEM / URT_ESOLVER. On failure *out is untouched
+ * and err (if not NULL, at most err_sz bytes) receives "file:line: key: reason" — or
+ * "file:override: key: reason" for a bad override, "file:line: syntax error: …" for bad YAML,
+ * "file: cannot open: …". Nullable: overrides, err. */
 int urt_model_load(const char *path, const char *const *overrides, urt_model_t **out, char *err,
                    size_t err_sz);
 
@@ -60,7 +62,8 @@ void urt_pstop_reset(const urt_model_t *m, urt_data_t *d);
 
 //---- step ----
 
-/* Advance the simulation by exactly m->dt with the fixed-step ROS2 scheme (model.md §5.3).
+/* Advance the simulation by exactly m->dt with the fixed-step ROS2 scheme (model.md §5.3);
+ * updates the state, time, d->qdd and the held sensor errors (see urt_data_update_outputs).
  * Context: RT — no allocation, no locks, no system calls, no printing.
  * Returns 0, or URT_ESOLVER if the state became non-finite (the step is undone and
  * URT_PSTOP_NONFINITE_STATE set). */
@@ -71,8 +74,8 @@ int urt_step(const urt_model_t *m, urt_data_t *d);
  * with d's held errors. Context: RT. */
 void urt_rhs(const urt_model_t *m, const urt_data_t *d, double s, const double *x, double *xdot);
 
-/* Recompute d's derived outputs (torques, measurements, TCP pose) from its state.
- * Context: RT. */
+/* Recompute d's derived outputs (torques, voltages, measurements, TCP pose) from its state
+ * and command. urt_step does not: call this before reading them. Context: RT. */
 void urt_data_update_outputs(const urt_model_t *m, urt_data_t *d);
 
 /* Sample the sensors: draw noise, quantise and hold the measurement errors for the next

@@ -74,8 +74,9 @@ typedef struct urt_data {
   urt_rng_t rng;
   double qdd_prev[URT_NJ];           /* arm accelerations of the last step (sub-step coupling) */
 
-  /* derived — recomputed at the end of every step */
-  double qdd[URT_NJ];                /* joint acceleration             [rad/s²] */
+  /* derived — qdd by every step; the rest by urt_data_update_outputs(), which the reader
+   * calls at its own sampling rate (a 500 Hz controller needs them 40× less often) */
+  double qdd[URT_NJ];                /* mean joint acceleration over the last step [rad/s²] */
   double i_fb[URT_NJ];               /* measured current               [A]      */
   double qdm_fb[URT_NJ];             /* measured motor speed           [rad/s]  */
   double q_fb[URT_NJ];               /* measured joint position        [rad]    */
