@@ -28,7 +28,7 @@ constexpr double kGamma = 1.7071067811865475244;  // 1 + 1/√2: L-stable ROS2
 
 // Tables for one joint at one step size and one active set.
 struct DriveTables {
-  double winv[URT_NXD * URT_NXD];  // (I − γ h A_d)⁻¹, row-major
+  double winv[URT_NXD * URT_NXD];  // (I − γ h A_d)⁻¹, column-major
   double winv_bq[URT_NXD];         // (I − γ h A_d)⁻¹ ∂f_d/∂q   (input from the arm angle)
   double bd[URT_NXD];              // k_d = W⁻¹ r_d + γ h W⁻¹ B_q r_q + bd · k_q̇
   double fq_set[URT_NXD];          // ∂f_d/∂q_set    (for the ∂f/∂t term)
@@ -54,9 +54,10 @@ namespace urt::core {
 // Build the tables for a prepared model. Context: non-RT. Returns 0 or URT_ESOLVER.
 int integrator_prepare(const urt_model_t* m, urt_integrator_tables* tab) noexcept;
 
-// One macro step of size m->dt (sub-steps included). The caller handles sensors, outputs and
-// the finite-state check. Context: RT.
-void integrator_step(const urt_model_t* m, urt_data_t* d) noexcept;
+// One step of kind kMacro (size m->dt, the stiff-friction joints sub-stepped) or kSub (the
+// sub-step size, every joint together), starting s0 seconds into the current command. The
+// caller handles sensors, outputs and the plausibility check. Context: RT.
+void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) noexcept;
 
 }  // namespace urt::core
 

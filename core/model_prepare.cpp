@@ -112,7 +112,7 @@ int integrator_prepare(const urt_model_t* m, urt_integrator_tables* tab) noexcep
         VecD winv_bq = winv * b_q;
         VecD bd = gh * (gh * winv_bq + winv * b_qd);
         DriveTables& t = tab->t[j][kind][set];
-        Eigen::Map<Eigen::Matrix<double, URT_NXD, URT_NXD, Eigen::RowMajor>>(t.winv) = winv;
+        Eigen::Map<Eigen::Matrix<double, URT_NXD, URT_NXD>>(t.winv) = winv;
         Eigen::Map<VecD>(t.winv_bq) = winv_bq;
         Eigen::Map<VecD>(t.bd) = bd;
         Eigen::Map<VecD>(t.fq_set) = f_qset;

@@ -15,12 +15,27 @@
 
 namespace {
 
-bool state_finite(const urt_data_t* d) {
+// A step is implausible when it produced what no motion of the arm can: a non-finite value,
+// a bristle deflection far beyond g(q̇_max)/σ0 (LuGre keeps |z| below it), or, with the drives
+// engaged, a joint ten times faster than its limit. That is how the W-method fails at a
+// stick-to-slip reversal, where the bristle stiffness σ0|q̇|/g changes by orders of magnitude
+// within one step and a single linearisation cannot cover it.
+bool step_plausible(const urt_model_t* m, const urt_data_t* d) {
   for (int j = 0; j < URT_NJ; j++) {
     for (int i = 0; i < URT_NXJ; i++) {
       if (!std::isfinite(d->x[j][i])) {
         return false;
       }
+    }
+    const urt_friction_params_t& fp = m->friction[j];
+    if (fp.enabled) {
+      double z_max = urt_friction_g(&fp, m->joint[j].qd_max) / fp.sigma0;
+      if (std::fabs(d->x[j][URT_X_Z]) > 1.5 * z_max) {
+        return false;
+      }
+    }
+    if (m->drives_engaged && std::fabs(d->x[j][URT_X_QD]) > 10.0 * m->joint[j].qd_max) {
+      return false;
     }
   }
   return true;
@@ -92,8 +107,19 @@ extern "C" int urt_step(const urt_model_t* m, urt_data_t* d) {
   // integrate; keep the start state so that a failed step can be undone
   double x0[URT_NJ][URT_NXJ];
   std::memcpy(x0, d->x, sizeof x0);
-  urt::core::integrator_step(m, d);
-  if (!state_finite(d)) {
+  urt::core::integrator_step(m, d, urt::core::kMacro, 0.0);
+
+  // an implausible step is redone as fine steps of the whole model (rare: a few per second of
+  // stick-slip; each costs about n_sub macro steps)
+  if (!step_plausible(m, d)) {
+    std::memcpy(d->x, x0, sizeof x0);
+    const urt_integrator_tables* tab = m->tables;
+    for (int k = 0; k < tab->n_sub; k++) {
+      urt::core::integrator_step(m, d, urt::core::kSub, k * tab->h[urt::core::kSub]);
+    }
+    d->refined_count++;
+  }
+  if (!step_plausible(m, d)) {
     std::memcpy(d->x, x0, sizeof x0);
     d->pstop |= URT_PSTOP_NONFINITE_STATE;
     std::memset(&d->cmd, 0, sizeof d->cmd);

@@ -163,8 +163,8 @@ static void test_model_load__loads_ur5_in_si_units(void **state) {
   assert_near(m->dt, 5e-5, 0.0);
   assert_true(m->seed == 1);
   assert_int_equal(m->drives_engaged, 1);
-  assert_near(m->substep_h_max, 1e-5, 0.0);
-  assert_near(m->substep_ratio, 0.02, 0.0);
+  assert_near(m->substep_h_max, 5e-6, 0.0);
+  assert_near(m->substep_ratio, 0.015, 0.0);
 
   // arm: Table 4 mm/deg converted to m/rad, Table 5 with the link-1 ×1e-4 restored
   assert_near(m->arm.link[0].a, 0.110e-3, 1e-15);

@@ -6,6 +6,7 @@
 
 #include "test_model.h"
 #include "test_support.h"
+#include "traj.h"
 
 // A smooth motion on every joint: q0 + A sin(ω t), with consistent speed and acceleration.
 static void sine_command(const urt_model_t *m, double t, urt_command_t *c) {
@@ -242,6 +243,42 @@ static void test_step__released_arm_conserves_energy_for_10_s(void **state) {
   urt_model_free(m);
 }
 
+// Noisy excitation runs in which single W steps at stick-to-slip reversals used to blow up
+// (wrist 2 at 20 kHz, wrist 1 at 10 kHz): urt_step must redo them as sub-steps and never stop.
+static void run_excitation(const char *rate, uint64_t seed) {
+  const char *const ov[] = {rate, NULL};
+  urt_model_t *m = urt_test_model(ov);
+  urt_data_t *d = new_data(m);
+  urt_traj_t tr;
+  assert_int_equal(urt_traj_make_excitation(&tr, m->q0, NULL, seed), 0);
+  double worst = 0.0;
+  int n = (int)lround(10.0 / m->dt);
+  for (int k = 0; k < n; k++) {
+    urt_command_t c;
+    memset(&c, 0, sizeof c);
+    urt_traj_eval(&tr, d->t, c.q, c.qd, c.qdd);
+    assert_int_equal(urt_command_set(m, d, &c), 0);
+    assert_int_equal(urt_step(m, d), 0);
+    for (int j = 0; j < URT_NJ; j++) {
+      worst = fmax(worst, fabs(d->cmd.q[j] - d->x[j][URT_X_Q]));
+    }
+  }
+  print_message("%s seed %d: max tracking error %.4f deg, %u steps refined of %d\n", rate,
+                (int)seed, worst * 180.0 / M_PI, d->refined_count, n);
+  assert_int_equal(d->pstop, 0);
+  assert_true(worst < 0.01);
+  free(d);
+  urt_model_free(m);
+}
+
+static void test_step__noisy_excitations_at_10_and_20_khz_never_stop(void **state) {
+  (void)state;
+  run_excitation("simulation.dt=1e-4", 2);
+  run_excitation("simulation.dt=1e-4", 4);
+  run_excitation("simulation.dt=5e-5", 1);
+  run_excitation("simulation.dt=5e-5", 3);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_step__makes_no_heap_allocations),
@@ -250,6 +287,7 @@ int main(void) {
       cmocka_unit_test(test_step__same_seed_is_bit_identical_and_another_seed_is_not),
       cmocka_unit_test(test_step__settled_current_equals_gravity_over_kt_ratio_without_friction),
       cmocka_unit_test(test_step__released_arm_conserves_energy_for_10_s),
+      cmocka_unit_test(test_step__noisy_excitations_at_10_and_20_khz_never_stop),
   };
   return cmocka_run_group_tests_name("core/step", tests, NULL, NULL);
 }

@@ -114,8 +114,8 @@ def test_json_joints_carry_every_block_and_the_derived_values(resolved_json):
     assert [round(j["control"]["i_max"], 2) for j in joints] == [11.00, 10.91, 10.96, 2.90, 3.20,
                                                                   3.10]
     sim = resolved_json["simulation"]
-    assert sim == {"dt": 5e-5, "seed": 1, "drives_engaged": True, "substep_h_max": 1e-5,
-                   "substep_ratio": 0.02}
+    assert sim == {"dt": 5e-5, "seed": 1, "drives_engaged": True, "substep_h_max": 5e-6,
+                   "substep_ratio": 0.015}
     assert resolved_json["units"]["joints[].motor.kt"] == "N m/A"
     assert "joints[].control.i_max" in resolved_json["derived"]
     assert "joints[].motor.kt" not in resolved_json["derived"]

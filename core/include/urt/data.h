@@ -90,6 +90,7 @@ typedef struct urt_data {
   /* status */
   uint32_t pstop;                    /* URT_PSTOP_* bits; 0 when running        */
   uint32_t isat_count, vsat_count;   /* steps that began with a saturated loop  */
+  uint32_t refined_count;            /* steps redone as sub-steps (urt_step)    */
 } urt_data_t;
 
 #ifdef __cplusplus
