@@ -279,6 +279,36 @@ static void test_step__noisy_excitations_at_10_and_20_khz_never_stop(void **stat
   run_excitation("simulation.dt=5e-5", 3);
 }
 
+// With sub-stepping switched off, wrist 3's Stribeck dip is unstable at 50 µs: urt_step must
+// first redo implausible steps as fine steps, and when that cannot save the state, stop with a
+// finite state instead of diverging.
+static void test_step__unstable_settings_end_in_a_protective_stop_not_in_nan(void **state) {
+  (void)state;
+  const char *const ov[] = {"simulation.substep_ratio=100", NULL};
+  urt_model_t *m = urt_test_model(ov);
+  urt_data_t *d = new_data(m);
+  urt_traj_t tr;
+  assert_int_equal(urt_traj_make_excitation(&tr, m->q0, NULL, 1), 0);
+  int rc = 0, n = (int)lround(5.0 / m->dt), k;
+  for (k = 0; k < n && rc == 0; k++) {
+    urt_command_t c;
+    memset(&c, 0, sizeof c);
+    urt_traj_eval(&tr, d->t, c.q, c.qd, c.qdd);
+    urt_command_set(m, d, &c);
+    rc = urt_step(m, d);
+  }
+  print_message("stopped at t = %.4f s after %u refined steps\n", d->t, d->refined_count);
+  assert_int_equal(rc, URT_ESOLVER);
+  assert_true(d->pstop & URT_PSTOP_NONFINITE_STATE);
+  assert_true(d->refined_count > 0);
+  assert_true(state_finite(d));
+  for (int j = 0; j < URT_NJ; j++) {
+    assert_true(fabs(d->x[j][URT_X_QD]) < 10.0 * m->joint[j].qd_max);
+  }
+  free(d);
+  urt_model_free(m);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_step__makes_no_heap_allocations),
@@ -288,6 +318,7 @@ int main(void) {
       cmocka_unit_test(test_step__settled_current_equals_gravity_over_kt_ratio_without_friction),
       cmocka_unit_test(test_step__released_arm_conserves_energy_for_10_s),
       cmocka_unit_test(test_step__noisy_excitations_at_10_and_20_khz_never_stop),
+      cmocka_unit_test(test_step__unstable_settings_end_in_a_protective_stop_not_in_nan),
   };
   return cmocka_run_group_tests_name("core/step", tests, NULL, NULL);
 }

@@ -47,7 +47,7 @@ enum {
   URT_PSTOP_SPEED_LIMIT = 1u << 2,     /* speed set-point above qd_max    */
   URT_PSTOP_ACC_LIMIT = 1u << 3,       /* acceleration above qdd_max      */
   URT_PSTOP_TORQUE_LIMIT = 1u << 4,    /* torque feed-forward too large   */
-  URT_PSTOP_NONFINITE_STATE = 1u << 5  /* the integrator produced NaN/Inf */
+  URT_PSTOP_NONFINITE_STATE = 1u << 5  /* the integrator produced NaN/Inf or an implausible state */
 };
 
 /* One joint command, valid from the current step on. Within a step the set-point follows
