@@ -46,6 +46,7 @@ struct urt_integrator_tables {
   int substepped[URT_NJ];               // 1: joint j is sub-stepped
   double g_slope_min[URT_NJ];           // most negative dg/dq̇ of the friction law [N m s/rad]
   double j_out[URT_NJ];                 // smallest output inertia M_jj + J_CS seen [kg m²]
+  double z_max[URT_NJ];                 // LuGre bound g(q̇_max)/σ0 on |z| (0: no friction) [rad]
   urt::core::DriveTables t[URT_NJ][urt::core::kNumStepKinds][urt::core::kNumActiveSets];
 };
 

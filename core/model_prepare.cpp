@@ -91,6 +91,8 @@ int integrator_prepare(const urt_model_t* m, urt_integrator_tables* tab) noexcep
     tab->j_out[j] = output_inertia_min(m, j);
     double ratio = m->dt * std::fabs(tab->g_slope_min[j]) / tab->j_out[j];
     tab->substepped[j] = m->friction[j].enabled && tab->n_sub > 1 && ratio > m->substep_ratio;
+    const urt_friction_params_t& fp = m->friction[j];
+    tab->z_max[j] = fp.enabled ? urt_friction_g(&fp, m->joint[j].qd_max) / fp.sigma0 : 0.0;
   }
 
   // W_d⁻¹ and couplings for every joint, step kind and active set

@@ -27,12 +27,8 @@ bool step_plausible(const urt_model_t* m, const urt_data_t* d) {
         return false;
       }
     }
-    const urt_friction_params_t& fp = m->friction[j];
-    if (fp.enabled) {
-      double z_max = urt_friction_g(&fp, m->joint[j].qd_max) / fp.sigma0;
-      if (std::fabs(d->x[j][URT_X_Z]) > 1.5 * z_max) {
-        return false;
-      }
+    if (m->friction[j].enabled && std::fabs(d->x[j][URT_X_Z]) > 1.5 * m->tables->z_max[j]) {
+      return false;
     }
     if (m->drives_engaged && std::fabs(d->x[j][URT_X_QD]) > 10.0 * m->joint[j].qd_max) {
       return false;
