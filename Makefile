@@ -65,12 +65,17 @@ test-python: build
 bench: build
 	URT_BUILD=$(abspath build) $(PY) tools/bench.py --out build/bench.json
 
-# the full 10 s excitation comparison against CVODE (slow: minutes)
+# the full 10 s excitation comparison against CVODE, noise off, at 20 and 10 kHz (slow: about
+# 7 minutes each on one core)
+QUIET_SENSORS := --set sensors.noise=false --set sensors.quantise=false
 reference-compare: build
-	build/tools/urt_sim --traj excitation --duration 10 --compare --out build/compare
+	build/tools/urt_sim --traj excitation --duration 10 --compare $(QUIET_SENSORS) --rate 20000 \
+	  --decimate 20 --out build/compare20
+	build/tools/urt_sim --traj excitation --duration 10 --compare $(QUIET_SENSORS) --rate 10000 \
+	  --decimate 10 --out build/compare10
 
 plots: build
-	build/tools/urt_sim --traj excitation --duration 10 --out build/excitation.csv
+	build/tools/urt_sim --traj excitation --duration 10 --decimate 20 --out build/excitation.csv
 	$(PY) tools/plot_run.py build/excitation.csv --out build/plots
 
 run: build
