@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "integrator.hpp"
 #include "urt/core.h"
 
 namespace urt::core {
@@ -296,6 +297,25 @@ void print_simulation(Emitter &e, const urt_model_t *m) {
   e.end_map();
 }
 
+// What urt_model_prepare decided from the parameters: which joints are sub-stepped and why.
+void print_integrator(Emitter &e, const urt_model_t *m) {
+  const urt_integrator_tables *t = m->tables;
+  if (!t) {
+    return;
+  }
+  double sub[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    sub[j] = t->substepped[j];
+  }
+  e.begin_map("integrator");
+  e.num("n_sub", t->n_sub, "-", true);
+  e.num("h_sub", t->h[kSub], "s", true);
+  e.nums("substepped", sub, URT_NJ, "1 = sub-stepped joint", true);
+  e.nums("friction_slope_min", t->g_slope_min, URT_NJ, "N m s/rad", true);
+  e.nums("output_inertia_min", t->j_out, URT_NJ, "kg m^2", true);
+  e.end_map();
+}
+
 void print_arm(Emitter &e, const urt_arm_params_t *a) {
   e.begin_map("arm");
   e.nums("gravity", a->gravity, 3, "m/s^2");
@@ -429,6 +449,7 @@ extern "C" void urt_model_print(const urt_model_t *m, FILE *f, int json) {
     e.str("name", m->name, nullptr);
     e.str("source", m->source, nullptr);
     urt::core::print_simulation(e, m);
+    urt::core::print_integrator(e, m);
     urt::core::print_arm(e, &m->arm);
     e.begin_list("joints");
     for (int j = 0; j < URT_NJ; j++) {
