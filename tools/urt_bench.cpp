@@ -35,6 +35,10 @@
 namespace urt::tools {
 namespace {
 
+// set when the robot parameter file does not load: the tools exit 2 on that
+bool g_config_error = false;
+
+
 //---- options ----
 
 struct Options {
@@ -349,6 +353,7 @@ class UrtCase {
     char err[512] = "";
     int rc = urt_model_load(o.config.c_str(), ovr.data(), &m, err, sizeof err);
     if (rc != 0) {
+      g_config_error = true;
       fail(std::string("urt_model_load: ") + urt_strerror(rc) + (err[0] ? ": " : "") + err);
       return;
     }
@@ -1210,6 +1215,10 @@ int main(int argc, char **argv) {
   if (dma_fd >= 0) {
     close(dma_fd);
   }
-  // the core is what is being measured: failing to run it is a failure, MuJoCo's absence is not
+  // the core is what is being measured: failing to run it is a failure (2 for a bad config, as
+  // every urtwin tool), MuJoCo's absence is not
+  if (g_config_error) {
+    return 2;
+  }
   return rep.urt_status == "error" ? 1 : 0;
 }
