@@ -13,11 +13,8 @@
 namespace urt::core {
 namespace {
 
-#ifndef URT_STICK_SPEED
-#define URT_STICK_SPEED 1e-3
-#endif
 // Below this joint speed [rad/s] the friction Jacobian in W is the mean of its two sides.
-constexpr double kStickSpeed = URT_STICK_SPEED;
+constexpr double kStickSpeed = 1e-3;
 
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
@@ -295,14 +292,6 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
   Vec6 tau_ext;
   external_torque(m, d, tau_ext);
 
-  // sub-stepped joints first, on the arm frozen at t_n: their inertia M_pp and bias
-  // (Coriolis, gravity, and the other joints' last accelerations through M_pk)
-  Vec6 qdd_pres = Vec6::Zero();
-  double sub_end[URT_NJ][URT_NXJ];
-  bool any_sub = false;
-  for (int p = 0; p < URT_NJ; p++) {
-    any_sub = any_sub || sub[p];
-  }
   // the arm at x_n, once for the sub-steps and the macro step's first stage
   Mat6 mass_n;
   Vec6 h_n;
@@ -313,6 +302,14 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
       qd[j] = x[j][URT_X_QD];
     }
     mass_and_bias(m->arm, q, qd, mass_n, h_n);
+  }
+  // sub-stepped joints first, on the arm frozen at t_n: their inertia M_pp and bias
+  // (Coriolis, gravity, and the other joints' accelerations through M_pk)
+  Vec6 qdd_pres = Vec6::Zero();
+  double sub_end[URT_NJ][URT_NXJ];
+  bool any_sub = false;
+  for (int p = 0; p < URT_NJ; p++) {
+    any_sub = any_sub || sub[p];
   }
   if (any_sub) {
     for (int p = 0; p < URT_NJ; p++) {
