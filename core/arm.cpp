@@ -579,3 +579,21 @@ double urt_arm_energy(const urt_model_t* m, const double q[URT_NJ], const double
 }
 
 }  // extern "C"
+
+namespace urt::core {
+
+void wrench_torque(const urt_arm_params_t& a, const Vec6& q, const double w[6], Vec6& tau) noexcept {
+  tau.setZero();
+  bool any = false;
+  for (int i = 0; i < 6; i++) {
+    any = any || w[i] != 0.0;
+  }
+  if (!any) {
+    return;
+  }
+  Mat6 J;
+  jacobian(a, q, J);
+  tau.noalias() = J.transpose() * Eigen::Map<const Vec6>(w);
+}
+
+}  // namespace urt::core

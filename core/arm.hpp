@@ -52,6 +52,10 @@ void arm_frame(const urt_arm_params_t& a, const Vec6& q, int i, Mat3& R_BF, Vec3
 // Geometric Jacobian of the TCP in the base frame: rows (v; ω), v of the TCP point.
 void jacobian(const urt_arm_params_t& a, const Vec6& q, Mat6& J) noexcept;
 
+// Joint torques of an external wrench (force; torque) [N, N m] applied at the TCP and given in
+// the base frame: τ = Jᵀ w, frozen over a step. All zero (no Jacobian) when w is zero.
+void wrench_torque(const urt_arm_params_t& a, const Vec6& q, const double w[6], Vec6& tau) noexcept;
+
 // Inverse dynamics with gravity: tau = M(q) qdd + C(q, qd) qd + g(q) [N m].
 void rnea(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, const Vec6& qdd,
           Vec6& tau) noexcept;

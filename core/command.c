@@ -33,8 +33,7 @@ static uint32_t command_faults(const urt_model_t *m, const urt_command_t *c) {
   return bad;
 }
 
-// Hold the arm where it is: set-point at the joint positions, no motion, no feed-forward.
-static void command_hold(urt_data_t *d) {
+void urt__command_hold(urt_data_t *d) {
   memset(&d->cmd, 0, sizeof d->cmd);
   for (int j = 0; j < URT_NJ; j++) {
     d->cmd.q[j] = d->x[j][URT_X_Q];
@@ -45,7 +44,7 @@ int urt__command_check(const urt_model_t *m, urt_data_t *d) {
   uint32_t bad = command_faults(m, &d->cmd);
   if (bad) {
     d->pstop |= bad;
-    command_hold(d);
+    urt__command_hold(d);
     return URT_EPSTOP;
   }
   return URT_OK;
@@ -56,18 +55,12 @@ int urt_command_set(const urt_model_t *m, urt_data_t *d, const urt_command_t *cm
   if (d->pstop) {
     return URT_EPSTOP;
   }
-  uint32_t bad = command_faults(m, cmd);
-  if (bad) {
-    d->pstop |= bad;
-    command_hold(d);
-    return URT_EPSTOP;
-  }
   d->cmd = *cmd;
-  return URT_OK;
+  return urt__command_check(m, d);
 }
 
 void urt_pstop_reset(const urt_model_t *m, urt_data_t *d) {
   (void)m;
   d->pstop = 0;
-  command_hold(d);
+  urt__command_hold(d);
 }

@@ -114,26 +114,6 @@ void drive_ft(const JointW& w, const urt_command_t& c, int j, double s, double* 
 
 //---- arm ----
 
-// Joint torques of the external wrench at the TCP, τ = Jᵀ F (frozen over a step).
-void external_torque(const urt_model_t* m, const urt_data_t* d, Vec6& tau) noexcept {
-  tau.setZero();
-  bool any = false;
-  for (int i = 0; i < 6; i++) {
-    any = any || d->wrench_ext[i] != 0.0;
-  }
-  if (!any) {
-    return;
-  }
-  double q[URT_NJ], jac[36];
-  for (int j = 0; j < URT_NJ; j++) {
-    q[j] = d->x[j][URT_X_Q];
-  }
-  urt_arm_jacobian(m, q, jac);
-  Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> J(jac);
-  Eigen::Map<const Vec6> w(d->wrench_ext);
-  tau.noalias() = J.transpose() * w;
-}
-
 // The arm's accelerations for the macro joints given the joint torques, M(q) and the bias
 // h = C q̇ + g at q̈ = 0, with the sub-stepped joints' accelerations prescribed. Rows and
 // columns of prescribed joints are replaced by identity in M so that one 6×6 Cholesky serves
@@ -232,11 +212,11 @@ double sub_rates(const urt_model_t* m, const urt_data_t* d, int p, double s, con
   return t_net;
 }
 
-void substep_joint(const urt_model_t* m, urt_data_t* d, int p, double m_pp, double b,
-                   double tau_ext, double s0) noexcept {
+// Advances x, joint p's 21 states, over one macro step in n_sub sub-steps.
+void substep_joint(const urt_model_t* m, const urt_data_t* d, int p, double m_pp, double b,
+                   double tau_ext, double s0, double* x) noexcept {
   const urt_integrator_tables* tab = m->tables;
   const double h = tab->h[kSub];
-  double* x = d->x[p];
   double f[URT_NXJ], ft[URT_NXJ], r[URT_NXJ], k1[URT_NXJ], k2[URT_NXJ], x2[URT_NXJ];
   JointAux aux;
   JointW w;
@@ -289,8 +269,11 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
     sub[j] = kind == kMacro && tab->substepped[j];
   }
 
-  Vec6 tau_ext;
-  external_torque(m, d, tau_ext);
+  Vec6 tau_ext, q_n;
+  for (int j = 0; j < URT_NJ; j++) {
+    q_n[j] = x[j][URT_X_Q];
+  }
+  wrench_torque(m->arm, q_n, d->wrench_ext, tau_ext);
 
   // the arm at x_n, once for the sub-steps and the macro step's first stage
   Mat6 mass_n;
@@ -322,26 +305,15 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
       // on wrist 1 at 10 kHz). Free joints have only their last mean q̈.
       Vec6 qdd_other;
       for (int j = 0; j < URT_NJ; j++) {
-        qdd_other[j] = j == p ? 0.0 : (m->drives_engaged ? d->cmd.qdd[j] : d->qdd_prev[j]);
+        qdd_other[j] = j == p ? 0.0 : (m->drives_engaged ? d->cmd.qdd[j] : d->qdd[j]);
       }
       double bias_p = h_n[p] + mass_n.row(p).dot(qdd_other);
-      double qd0 = x[p][URT_X_QD];
-      double q0 = x[p][URT_X_Q];
-      double z0 = x[p][URT_X_Z];
-      double drive0[URT_NXD];
-      std::memcpy(drive0, x[p], sizeof drive0);
-      substep_joint(m, d, p, mass_n(p, p), bias_p, tau_ext[p], s0);
-      qdd_pres[p] = (x[p][URT_X_QD] - qd0) / h;
 
-      // the macro step integrates this joint's q, q̇ again from t_n with the mean
-      // acceleration; restore its start values and keep the sub-stepped end state aside
-      double end[URT_NXJ];
-      std::memcpy(end, x[p], sizeof end);
-      std::memcpy(x[p], drive0, sizeof drive0);
-      x[p][URT_X_Q] = q0;
-      x[p][URT_X_QD] = qd0;
-      x[p][URT_X_Z] = z0;
-      std::memcpy(sub_end[p], end, sizeof end);
+      // the joint runs ahead on a copy; the macro step integrates its q, q̇ from t_n with the
+      // mean acceleration, then takes the copy as the joint's end state
+      std::memcpy(sub_end[p], x[p], sizeof sub_end[p]);
+      substep_joint(m, d, p, mass_n(p, p), bias_p, tau_ext[p], s0, sub_end[p]);
+      qdd_pres[p] = (sub_end[p][URT_X_QD] - x[p][URT_X_QD]) / h;
     }
   }
 

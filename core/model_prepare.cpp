@@ -131,13 +131,10 @@ int integrator_prepare(const urt_model_t* m, urt_integrator_tables* tab) noexcep
 }  // namespace urt::core
 
 extern "C" int urt_model_prepare(urt_model_t* m) {
-  // derived drive parameters
+  // derived gear parameters (k_e, i_max and the sensor quanta come with the loader, which
+  // needs i_max for the current quantum)
   for (int j = 0; j < URT_NJ; j++) {
     urt_harmonic_drive_derive(&m->gear[j], m->motor[j].j);
-    if (m->motor[j].ke == 0.0) {
-      m->motor[j].ke = m->motor[j].kt;  // k_e = k_t in SI units (paper eq. 1)
-    }
-    m->control[j].i_max = m->joint[j].torque_max / (m->motor[j].kt * m->gear[j].ratio);
   }
   urt_arm_prepare(&m->arm);
 

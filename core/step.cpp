@@ -12,7 +12,6 @@
 #include "urt/core.h"
 #include "urt/drivers/friction.h"
 
-
 namespace {
 
 // A step is implausible when it produced what no motion of the arm can: a non-finite value,
@@ -52,10 +51,7 @@ void outputs_drive(const urt_model_t* m, urt_data_t* d) {
   double f[URT_NXJ];
   for (int j = 0; j < URT_NJ; j++) {
     urt::core::JointAux aux;
-    urt::core::drive_rhs(m, j, d->x[j], urt::core::joint_input(m, d, j, 0.0),
-                         urt::core::kNatural, f, &aux);
-    urt_friction_state_t fs = {d->x[j][URT_X_Z]};
-    urt_friction_out_t fr = urt_friction_eval(&m->friction[j], &fs, d->x[j][URT_X_QD]);
+    urt::core::joint_rates(m, d, j, 0.0, d->x[j], f, &aux);
     d->t_cs[j] = aux.t_cs;
     d->t_in[j] = aux.t_in;
     d->i_ref[j] = aux.i_ref;
@@ -63,7 +59,7 @@ void outputs_drive(const urt_model_t* m, urt_data_t* d) {
     d->i_fb[j] = aux.i_fb;
     d->qdm_fb[j] = aux.qdm_fb;
     d->q_fb[j] = aux.q_fb;
-    d->t_f[j] = fr.t_f;
+    d->t_f[j] = aux.fr.t_f;
   }
 }
 
@@ -118,10 +114,7 @@ extern "C" int urt_step(const urt_model_t* m, urt_data_t* d) {
   if (!step_plausible(m, d)) {
     std::memcpy(d->x, x0, sizeof x0);
     d->pstop |= URT_PSTOP_NONFINITE_STATE;
-    std::memset(&d->cmd, 0, sizeof d->cmd);
-    for (int j = 0; j < URT_NJ; j++) {
-      d->cmd.q[j] = d->x[j][URT_X_Q];
-    }
+    urt__command_hold(d);
     return URT_ESOLVER;
   }
 
@@ -136,7 +129,6 @@ extern "C" void urt__step_finish(const urt_model_t* m, urt_data_t* d,
   // time, mean accelerations over the step, and the command carried to the new step
   for (int j = 0; j < URT_NJ; j++) {
     d->qdd[j] = (d->x[j][URT_X_QD] - x0[j][URT_X_QD]) / h;
-    d->qdd_prev[j] = d->qdd[j];
   }
   d->steps++;
   d->t = (double)d->steps * h;
@@ -149,8 +141,8 @@ extern "C" void urt__step_finish(const urt_model_t* m, urt_data_t* d,
 
 extern "C" void urt_rhs(const urt_model_t* m, const urt_data_t* d, double s, const double* x,
                         double* xdot) {
-  using Vec6 = Eigen::Matrix<double, 6, 1>;
-  Vec6 tau, q, qd, zero = Vec6::Zero(), bias;
+  using urt::core::Vec6;
+  Vec6 tau, q, qd, tau_ext, bias;
 
   // joints: drives and friction; the arm's external wrench enters as Jᵀ F at the current q
   for (int j = 0; j < URT_NJ; j++) {
@@ -160,22 +152,12 @@ extern "C" void urt_rhs(const urt_model_t* m, const urt_data_t* d, double s, con
     q[j] = xj[URT_X_Q];
     qd[j] = xj[URT_X_QD];
   }
-  bool any = false;
-  for (int i = 0; i < 6; i++) {
-    any = any || d->wrench_ext[i] != 0.0;
-  }
-  if (any) {
-    double jac[36];
-    urt_arm_jacobian(m, q.data(), jac);
-    Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> J(jac);
-    Eigen::Map<const Vec6> w(d->wrench_ext);
-    tau += J.transpose() * w;
-  }
+  urt::core::wrench_torque(m->arm, q, d->wrench_ext, tau_ext);
+  tau += tau_ext;
 
   // arm: the whole coupled 6-DoF forward dynamics, no splitting
-  Eigen::Matrix<double, 6, 6> mass;
-  urt::core::crba(m->arm, q, mass);
-  urt::core::rnea(m->arm, q, qd, zero, bias);
+  urt::core::Mat6 mass;
+  urt::core::mass_and_bias(m->arm, q, qd, mass, bias);
   Vec6 qdd = mass.llt().solve(tau - bias);
   for (int j = 0; j < URT_NJ; j++) {
     xdot[j * URT_NXJ + URT_X_QD] = qdd[j];

@@ -10,6 +10,9 @@
 extern "C" {
 #endif
 
+/* Hold the arm where it is: set-point at the joint positions, no motion, no feed-forward. */
+void urt__command_hold(urt_data_t *d);
+
 /* Refuse a bad command in d->cmd: protective stop and hold. Returns 0 or URT_EPSTOP. */
 int urt__command_check(const urt_model_t *m, urt_data_t *d);
 

@@ -4,10 +4,19 @@
 
 #include <math.h>
 
+// g(|q̇|) and |q̇|·g'(|q̇|), which stays finite at rest although g' does not. One exp and one
+// cbrt serve both.
+static void g_and_vdg(const urt_friction_params_t *p, double v, double *g, double *v_dg) {
+  double e = exp(-p->k_q * v / p->qd_s);
+  double v23 = cbrt(v * v);  // |q̇|^{2/3}: the printed q̇^{2/3} is NaN for q̇ < 0 (model.md §1.6)
+  *g = p->f_c * (1.0 + p->k_static * e) + p->f_v * v23;
+  *v_dg = -p->f_c * p->k_static * (p->k_q / p->qd_s) * e * v + (2.0 / 3.0) * p->f_v * v23;
+}
+
 double urt_friction_g(const urt_friction_params_t *p, double qd) {
-  double v = fabs(qd);
-  // |q̇|^{2/3}: the printed q̇^{2/3} is NaN for q̇ < 0 in floating point (model.md §1.6)
-  return p->f_c * (1.0 + p->k_static * exp(-p->k_q * v / p->qd_s)) + p->f_v * cbrt(v * v);
+  double g, v_dg;
+  g_and_vdg(p, fabs(qd), &g, &v_dg);
+  return g;
 }
 
 double urt_friction_dg(const urt_friction_params_t *p, double qd) {
@@ -15,10 +24,9 @@ double urt_friction_dg(const urt_friction_params_t *p, double qd) {
   if (v == 0.0) {
     return 0.0;
   }
-  double s = qd > 0.0 ? 1.0 : -1.0;
-  double stribeck = -p->f_c * p->k_static * (p->k_q / p->qd_s) * exp(-p->k_q * v / p->qd_s);
-  double viscous = (2.0 / 3.0) * p->f_v / cbrt(v);
-  return s * (stribeck + viscous);
+  double g, v_dg;
+  g_and_vdg(p, v, &g, &v_dg);
+  return (qd > 0.0 ? 1.0 : -1.0) * v_dg / v;
 }
 
 urt_friction_out_t urt_friction_eval(const urt_friction_params_t *p,
@@ -28,19 +36,16 @@ urt_friction_out_t urt_friction_eval(const urt_friction_params_t *p,
   if (!p->enabled) {
     return out;
   }
-  double v = fabs(qd);
-  double e = exp(-p->k_q * v / p->qd_s);
-  double v23 = cbrt(v * v);
-  double g = p->f_c * (1.0 + p->k_static * e) + p->f_v * v23;
+  double v = fabs(qd), g, v_dg;
+  g_and_vdg(p, v, &g, &v_dg);
 
   // ż = q̇ − σ0 |q̇| z / g
   double r = v / g;
   out.dz = qd - p->sigma0 * r * z;
   out.ddz_dz = -p->sigma0 * r;
 
-  // d(|q̇|/g)/dq̇ = sgn(q̇) [1/g − |q̇| g'(|q̇|)/g²]; |q̇|·g' stays finite at 0 although g' does not
+  // d(|q̇|/g)/dq̇ = sgn(q̇) [1/g − |q̇| g'(|q̇|)/g²]
   double sgn = qd > 0.0 ? 1.0 : (qd < 0.0 ? -1.0 : 0.0);
-  double v_dg = -p->f_c * p->k_static * (p->k_q / p->qd_s) * e * v + (2.0 / 3.0) * p->f_v * v23;
   double dr = sgn * (1.0 / g - v_dg / (g * g));
   out.ddz_dqd = 1.0 - p->sigma0 * z * dr;
 

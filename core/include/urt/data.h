@@ -72,7 +72,6 @@ typedef struct urt_data {
   /* discrete states — held measurement errors and the RNG */
   double eps_i[URT_NJ], eps_w[URT_NJ], eps_q[URT_NJ];
   urt_rng_t rng;
-  double qdd_prev[URT_NJ];           /* arm accelerations of the last step (sub-step coupling) */
 
   /* derived — qdd by every step; the rest by urt_data_update_outputs(), which the reader
    * calls at its own sampling rate (a 500 Hz controller needs them 40× less often) */
