@@ -337,8 +337,8 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
     joint_w_init(m, j, kind, aux[j], x[j][URT_X_QD], &w[j]);
     wmat(j, j) -= gh * w[j].c1;
     drive_ft(w[j], d->cmd, j, s0, ft[j]);
-    d->isat_count += (aux[j].active_set & kCurrentSat) != 0;
-    d->vsat_count += (aux[j].active_set & kVoltageSat) != 0;
+    d->isat_count += kind == kMacro && (aux[j].active_set & kCurrentSat) != 0;
+    d->vsat_count += kind == kMacro && (aux[j].active_set & kVoltageSat) != 0;
   }
   // the arm's own linearisation B_q = ∂τ_id/∂q, B_q̇ = ∂τ_id/∂q̇ (inverse dynamics at the
   // stage-1 accelerations). With the drives engaged their stiffness dominates W and this adds

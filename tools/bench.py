@@ -34,40 +34,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
-# model.md Tables 4–5 (calibrated DH in mm and degrees; masses, CoMs, inertias about the CoM in
-# DH frame i, 1e-4 kg m²). Used only when neither urt_config nor urt_bench can give the arm.
-_TABLE4 = [  # a, alpha, beta, d, theta
-    (0.110, 89.905, 0.0, 89.084, 0.003),
-    (-425.156, 0.004, 0.013, 0.0, -0.019),
-    (-392.066, -0.232, 0.071, 0.0, -0.013),
-    (0.025, 89.966, 0.0, 110.212, -0.008),
-    (-0.069, -90.013, 0.0, 94.879, 0.009),
-    (0.0, 0.0, 0.0, 82.494, -0.006),
-]
-_TABLE5 = [  # mass, com, (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)·1e-4
-    (3.7, (0.0, -0.02561, 0.00193), (67, 64, 67, 0, 0, 0)),
-    (8.393, (0.2125, 0.0, 0.11336), (149, 3564, 3553, 0, 0, 0)),
-    (2.33, (0.15, 0.0, 0.0265), (25, 551, 546, 0, 34, 0)),
-    (1.219, (0.0, -0.0018, 0.01634), (12, 12, 9, 0, 0, 0)),
-    (1.219, (0.0, 0.0018, 0.01634), (12, 12, 9, 0, 0, 0)),
-    (0.1879, (0.0, 0.0, -0.001159), (1, 1, 1, 0, 0, 0)),
-]
-_UR5_HOME = [0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0]
-
-
 def warn(msg):
     print(f"bench.py: warning: {msg}", file=sys.stderr)
-
-
-def fallback_arm():
-    links = []
-    for (a, al, be, d, th), (m, c, inertia) in zip(_TABLE4, _TABLE5):
-        links.append({
-            "a": a * 1e-3, "alpha": math.radians(al), "beta": math.radians(be),
-            "d": d * 1e-3, "theta": math.radians(th), "mass": m, "com": list(c),
-            "inertia": [v * 1e-4 for v in inertia],
-        })
-    return {"gravity": [0.0, 0.0, -9.81], "tcp": [0.0] * 6, "links": links}
 
 
 # ---- machine and build info --------------------------------------------------------------
@@ -158,7 +126,7 @@ def run_urt_bench(args, build):
 
 def load_arm(args, build, bench):
     """(arm, source, q0 or None): the UR5 arm as the core sees it — from urt_config, else from
-    urt_bench's dump of the model it loaded, else from model.md's tables."""
+    urt_bench's dump of the model it loaded; (None, reason, None) when neither has it."""
     exe = Path(build) / "tools" / "urt_config"
     if os.access(exe, os.X_OK):
         cmd = [str(exe), "--print", "--json", args.config]
@@ -178,8 +146,7 @@ def load_arm(args, build, bench):
             warn(f"urt_config: {e}")
     if "arm" in bench and len(bench["arm"].get("links", [])) == 6:
         return bench["arm"], "urt_bench (model as loaded)", bench["arm"].get("q0")
-    warn("no urt model available: Pinocchio uses model.md Tables 4-5 hard-wired in bench.py")
-    return fallback_arm(), "fallback: model.md Tables 4-5", None
+    return None, "no urt model: neither urt_config nor urt_bench loaded the config", None
 
 
 def pin_model(pin, np, arm):
@@ -233,6 +200,8 @@ def bench_aba(args, build, bench):
         return {"status": "unavailable", "error": f"import pinocchio: {e}"}
     res["version"] = pin.__version__
     arm, source, q0 = load_arm(args, build, bench)
+    if arm is None:
+        return {"status": "unavailable", "error": source}
     res["model_source"] = source
     model = pin_model(pin, np, arm)
     data = model.createData()
@@ -243,7 +212,7 @@ def bench_aba(args, build, bench):
     res["gravity_torque_q0"] = [float(x) for x in g0]
 
     # inputs near the benchmark's start configuration, moving at up to 1 rad/s
-    q0 = np.array(q0 if q0 is not None else _UR5_HOME, dtype=float)
+    q0 = np.array(q0 if q0 is not None else np.zeros(model.nq), dtype=float)
     rng = np.random.default_rng(1)
     nb = args.aba_native_batch
     Q = np.asfortranarray(q0[:, None] + rng.uniform(-0.5, 0.5, (6, nb)))

@@ -8,11 +8,10 @@
 // For every dt it loads the model with "<dt-key>=<dt>" added to the overrides, starts at rest,
 // drives a moving sine set-point on all joints and times each urt_step with CLOCK_MONOTONIC
 // into a preallocated array. All cases (urt at each dt, MuJoCo variants) are timed round robin
-// in chunks (--chunk), so load changes on the machine hit them alike. MuJoCo is dlopen'ed (the pip wheel ships libmujoco.so), so the
-// benchmark builds and runs without it; if it cannot be loaded the JSON and the table say
-// "unavailable". Only medians, percentiles and ratios are reported — never a pass/fail on time:
+// in chunks (--chunk), so load changes on the machine hit them alike. MuJoCo (bench_mujoco.h)
+// is dlopen'ed, so the benchmark builds and runs without it; if it cannot be loaded the JSON and
+// the table say "unavailable". Only medians, percentiles and ratios are reported — never a pass/fail on time:
 // the machine is shared and noisy. Pinocchio's ABA is timed by tools/bench.py, which merges.
-#include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <getopt.h>
@@ -30,6 +29,8 @@
 #include <string>
 #include <vector>
 
+#include "bench_mujoco.h"
+#include "bench_timing.h"
 #include "urt/core.h"
 
 namespace urt::tools {
@@ -37,7 +38,6 @@ namespace {
 
 // set when the robot parameter file does not load: the tools exit 2 on that
 bool g_config_error = false;
-
 
 //---- options ----
 
@@ -203,110 +203,6 @@ int parse_options(int argc, char **argv, Options *o) {
   return 0;
 }
 
-//---- timing and statistics ----
-
-inline int64_t now_ns() {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<int64_t>(ts.tv_sec) * 1000000000LL + ts.tv_nsec;
-}
-
-struct Stats {
-  long n = 0;
-  double min_us = 0, median_us = 0, mean_us = 0, p99_us = 0, p999_us = 0, max_us = 0;
-};
-
-// nearest-rank percentile of sorted data, p in (0, 1]
-double percentile(const std::vector<int64_t> &sorted, double p) {
-  size_t n = sorted.size();
-  size_t k = static_cast<size_t>(std::ceil(p * static_cast<double>(n)));
-  k = std::min(std::max<size_t>(k, 1), n);
-  return static_cast<double>(sorted[k - 1]);
-}
-
-Stats summarise(std::vector<int64_t> samples_ns) {
-  Stats s;
-  if (samples_ns.empty()) {
-    return s;
-  }
-  std::sort(samples_ns.begin(), samples_ns.end());
-  size_t n = samples_ns.size();
-  double sum = 0;
-  for (int64_t x : samples_ns) {
-    sum += static_cast<double>(x);
-  }
-  s.n = static_cast<long>(n);
-  s.min_us = samples_ns.front() * 1e-3;
-  s.max_us = samples_ns.back() * 1e-3;
-  s.mean_us = sum / static_cast<double>(n) * 1e-3;
-  s.median_us = (n % 2 ? static_cast<double>(samples_ns[n / 2])
-                       : 0.5 * static_cast<double>(samples_ns[n / 2 - 1] + samples_ns[n / 2])) *
-                1e-3;
-  s.p99_us = percentile(samples_ns, 0.99) * 1e-3;
-  s.p999_us = percentile(samples_ns, 0.999) * 1e-3;
-  return s;
-}
-
-// median cost of an empty timed region: what every sample carries on top of the work (reported,
-// not subtracted — it is ~20 ns on a vDSO clock, well below the noise of a shared machine)
-double clock_overhead_ns() {
-  std::vector<int64_t> v(20000);
-  for (auto &x : v) {
-    int64_t t0 = now_ns();
-    int64_t t1 = now_ns();
-    x = t1 - t0;
-  }
-  std::sort(v.begin(), v.end());
-  return static_cast<double>(v[v.size() / 2]);
-}
-
-//---- the moving set-point ----
-
-// Per joint j: q = q0 + s·A·(1 − cos ωt), so the arm starts at rest at q0 and reverses at every
-// half period (friction passes through stick–slip), with consistent q, q̇, q̈. Frequencies
-// differ per joint so the configuration — and M(q) — keeps changing.
-struct Setpoint {
-  double q0[URT_NJ], amp[URT_NJ], omega[URT_NJ];
-
-  void at(double t, double q[URT_NJ], double qd[URT_NJ], double qdd[URT_NJ]) const {
-    for (int j = 0; j < URT_NJ; ++j) {
-      double c = std::cos(omega[j] * t), s = std::sin(omega[j] * t);
-      q[j] = q0[j] + amp[j] * (1.0 - c);
-      qd[j] = amp[j] * omega[j] * s;
-      qdd[j] = amp[j] * omega[j] * omega[j] * c;
-    }
-  }
-};
-
-// amp carries the direction (sign) that keeps q0 + 2A inside the limits with a margin.
-Setpoint make_setpoint(const double q0[URT_NJ], const double q_min[URT_NJ],
-                       const double q_max[URT_NJ], const double qd_max[URT_NJ],
-                       const double qdd_max[URT_NJ], double speed) {
-  const double kMargin = 0.05;  // rad kept from each limit
-  Setpoint sp;
-  for (int j = 0; j < URT_NJ; ++j) {
-    double w = 2.0 * M_PI * (0.25 + 0.05 * j);
-    // a limit of 0 (not set in the file) means "no limit", not "do not move"
-    double v = qd_max[j] > 0 ? std::min(speed, 0.9 * qd_max[j]) : speed;
-    double a = v / w;
-    if (qdd_max[j] > 0) {
-      a = std::min(a, 0.9 * qdd_max[j] / (w * w));
-    }
-    double room_up = (q_max[j] - kMargin - q0[j]) / 2.0;
-    double room_down = (q0[j] - q_min[j] - kMargin) / 2.0;
-    if (a <= room_up) {
-      sp.amp[j] = a;
-    } else if (a <= room_down) {
-      sp.amp[j] = -a;
-    } else {
-      sp.amp[j] = room_up >= room_down ? std::max(room_up, 0.0) : -std::max(room_down, 0.0);
-    }
-    sp.q0[j] = q0[j];
-    sp.omega[j] = w;
-  }
-  return sp;
-}
-
 //---- urt_step ----
 
 struct UrtRun {
@@ -332,6 +228,30 @@ std::string fmt_g(double v) {
   return b;
 }
 
+using ModelPtr = std::unique_ptr<urt_model_t, void (*)(urt_model_t *)>;
+
+// The model of --config with the user's overrides, at dt when dt > 0. On failure *err says why
+// and the returned pointer is empty.
+ModelPtr load_model(const Options &o, double dt, std::string *err) {
+  std::vector<std::string> ovr_s = o.sets;
+  if (dt > 0) {
+    ovr_s.push_back(o.dt_key + "=" + fmt_g(dt));
+  }
+  std::vector<const char *> ovr;
+  for (const auto &s : ovr_s) {
+    ovr.push_back(s.c_str());
+  }
+  ovr.push_back(nullptr);
+  urt_model_t *m = nullptr;
+  char e[512] = "";
+  int rc = urt_model_load(o.config.c_str(), ovr.data(), &m, e, sizeof e);
+  if (rc != 0) {
+    g_config_error = true;
+    *err = std::string("urt_model_load: ") + urt_strerror(rc) + (e[0] ? ": " : "") + e;
+  }
+  return ModelPtr(m, urt_model_free);
+}
+
 // One urt_step workload at one dt: model, data and set-point. main() advances every case in
 // chunks, round robin, so all of them share the machine's quiet and busy moments.
 class UrtCase {
@@ -342,22 +262,12 @@ class UrtCase {
   // "error" and the case is never stepped
   UrtCase(const Options &o, double dt, ArmDump *dump) {
     r.dt = dt;
-    std::vector<std::string> ovr_s = o.sets;
-    ovr_s.push_back(o.dt_key + "=" + fmt_g(dt));
-    std::vector<const char *> ovr;
-    for (const auto &s : ovr_s) {
-      ovr.push_back(s.c_str());
-    }
-    ovr.push_back(nullptr);
-    urt_model_t *m = nullptr;
-    char err[512] = "";
-    int rc = urt_model_load(o.config.c_str(), ovr.data(), &m, err, sizeof err);
-    if (rc != 0) {
-      g_config_error = true;
-      fail(std::string("urt_model_load: ") + urt_strerror(rc) + (err[0] ? ": " : "") + err);
+    m_ = load_model(o, dt, &r.error);
+    if (!m_) {
+      r.status = "error";
       return;
     }
-    m_.reset(m);
+    const urt_model_t *m = m_.get();
 
     // a wrong dt key would silently benchmark the file's rate
     if (std::fabs(m->dt - dt) > 1e-12 * dt) {
@@ -366,24 +276,19 @@ class UrtCase {
       return;
     }
 
-    double q_min[URT_NJ], q_max[URT_NJ], qd_max[URT_NJ], qdd_max[URT_NJ];
-    for (int j = 0; j < URT_NJ; ++j) {
-      q_min[j] = m->joint[j].q_min;
-      q_max[j] = m->joint[j].q_max;
-      qd_max[j] = m->joint[j].qd_max;
-      qdd_max[j] = m->joint[j].qdd_max;
-    }
-    sp_ = make_setpoint(m->q0, q_min, q_max, qd_max, qdd_max, o.speed);
+    sp_ = make_setpoint(m, o.speed);
     if (dump != nullptr && !dump->valid) {
       dump->valid = true;
       dump->arm = m->arm;
-      memcpy(dump->q0, m->q0, sizeof dump->q0);
-      memcpy(dump->q_min, q_min, sizeof q_min);
-      memcpy(dump->q_max, q_max, sizeof q_max);
+      for (int j = 0; j < URT_NJ; ++j) {
+        dump->q0[j] = m->q0[j];
+        dump->q_min[j] = m->joint[j].q_min;
+        dump->q_max[j] = m->joint[j].q_max;
+      }
     }
 
     d_ = std::make_unique<urt_data_t>();
-    rc = urt_data_init(m, d_.get(), nullptr);
+    int rc = urt_data_init(m, d_.get(), nullptr);
     if (rc != 0) {
       fail(std::string("urt_data_init: ") + urt_strerror(rc));
       return;
@@ -394,7 +299,6 @@ class UrtCase {
   }
 
   bool ok() const { return r.status == "ok"; }
-  const Setpoint &setpoint() const { return sp_; }
 
   // Advance n steps. Only urt_step is timed; the command is installed between steps, as the
   // RT loop does.
@@ -439,301 +343,12 @@ class UrtCase {
     r.error = e;
   }
 
-  std::unique_ptr<urt_model_t, void (*)(urt_model_t *)> m_{nullptr, urt_model_free};
+  ModelPtr m_{nullptr, urt_model_free};
   std::unique_ptr<urt_data_t> d_;
   Setpoint sp_{};
   urt_command_t cmd_;
   std::vector<int64_t> samples_;
   size_t done_ = 0;
-};
-
-//---- MuJoCo through dlopen ----
-
-// The few C API entry points we need, typed by hand so the build needs no MuJoCo headers.
-// mjModel*/mjData* are opaque here; the pip wheel is a double (mjtNum = double) build.
-struct MjApi {
-  void *handle = nullptr;
-  void *(*load_xml)(const char *, const void *, char *, int) = nullptr;
-  void *(*make_data)(const void *) = nullptr;
-  void (*step)(const void *, void *) = nullptr;
-  void (*delete_data)(void *) = nullptr;
-  void (*delete_model)(void *) = nullptr;
-  void (*set_state)(const void *, void *, const double *, int) = nullptr;
-  void (*get_state)(const void *, const void *, double *, int) = nullptr;
-  int (*state_size)(const void *, int) = nullptr;
-  const char *(*version_string)(void) = nullptr;
-  std::string version;
-
-  // mjtState bits (mujoco/mjtype.h), stable since MuJoCo 3.0
-  static constexpr int kStateQpos = 1 << 1;
-  static constexpr int kStateCtrl = 1 << 6;
-
-  bool open(const std::string &path, std::string *err) {
-    handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (handle == nullptr) {
-      const char *e = dlerror();
-      *err = std::string("dlopen: ") + (e ? e : "failed");
-      return false;
-    }
-    bool ok = sym("mj_loadXML", &load_xml, err) && sym("mj_makeData", &make_data, err) &&
-              sym("mj_step", &step, err) && sym("mj_deleteData", &delete_data, err) &&
-              sym("mj_deleteModel", &delete_model, err) && sym("mj_setState", &set_state, err) &&
-              sym("mj_getState", &get_state, err) && sym("mj_stateSize", &state_size, err);
-    if (!ok) {
-      return false;
-    }
-    // optional: only for the report
-    version_string = reinterpret_cast<const char *(*)(void)>(dlsym(handle, "mj_versionString"));
-    version = version_string ? version_string() : "unknown";
-    return true;
-  }
-
-  template <typename F>
-  bool sym(const char *name, F *f, std::string *err) {
-    void *p = dlsym(handle, name);
-    if (p == nullptr) {
-      *err = std::string("dlsym ") + name + ": not found";
-      return false;
-    }
-    *f = reinterpret_cast<F>(p);
-    return true;
-  }
-
-  ~MjApi() {
-    if (handle != nullptr) {
-      dlclose(handle);
-    }
-  }
-};
-
-struct MjVariant {
-  const char *name;
-  const char *integrator;   // MJCF option/@integrator
-  bool frictionloss;        // joint dry friction → constraint solver every step
-};
-
-// "euler" is MuJoCo's default and the primary comparison; rk4 is the 4-stage explicit scheme
-// (urt_step is a 2-stage implicit one plus sub-steps); frictionloss adds the constraint solver,
-// the nearest MuJoCo gets to a friction model.
-const MjVariant kMjVariants[] = {
-    {"euler", "Euler", false},
-    {"rk4", "RK4", false},
-    {"euler_frictionloss", "Euler", true},
-};
-
-// UR5-like model (nominal UR5 "series 3" DH, model.md §1.8): masses, CoMs and inertias of
-// Table 5; armature τ²J_M (Table A1: 1.9147 / 0.2118 kg m²); viscous damping and frictionloss at
-// the proposed f_c (8 / 2 N m); position actuators with PD gains and torque limits 150 / 28 N m;
-// no contacts. Body i is DH frame i−1 turned by q_i, so the standard-DH fixed part
-// Tz(d)·Tx(a)·Rx(α) becomes the child body's pos/quat and link i's inertial sits at that
-// offset; fullinertia excludes a quat, so the tensor is rotated by Rx(α) here.
-std::string ur5_mjcf(double dt, const MjVariant &v) {
-  static const double a[6] = {0, -0.425, -0.39225, 0, 0, 0};
-  static const double d[6] = {0.089159, 0, 0, 0.10915, 0.09465, 0.0823};
-  static const double alpha[6] = {M_PI / 2, 0, 0, M_PI / 2, -M_PI / 2, 0};
-  static const double mass[6] = {3.7, 8.393, 2.33, 1.219, 1.219, 0.1879};
-  static const double com[6][3] = {{0, -0.02561, 0.00193}, {0.2125, 0, 0.11336},
-                                   {0.15, 0, 0.0265},      {0, -0.0018, 0.01634},
-                                   {0, 0.0018, 0.01634},   {0, 0, -0.001159}};
-  // Ixx Iyy Izz Ixy Ixz Iyz about the CoM, frame-i axes [1e-4 kg m²]
-  static const double inertia[6][6] = {{67, 64, 67, 0, 0, 0},     {149, 3564, 3553, 0, 0, 0},
-                                       {25, 551, 546, 0, 34, 0},  {12, 12, 9, 0, 0, 0},
-                                       {12, 12, 9, 0, 0, 0},      {1, 1, 1, 0, 0, 0}};
-  static const double armature[6] = {1.9147, 1.9147, 1.9147, 0.2118, 0.2118, 0.2118};
-  static const double damping[6] = {8, 8, 8, 2, 2, 2};
-  static const double kp[6] = {20000, 20000, 10000, 2000, 2000, 2000};
-  static const double kv[6] = {400, 400, 200, 20, 20, 20};
-  static const double tmax[6] = {150, 150, 150, 28, 28, 28};
-
-  std::string x;
-  char b[512];
-  snprintf(b, sizeof b,
-           "<mujoco model=\"ur5_like\">\n"
-           "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n"
-           "  <option timestep=\"%.12g\" integrator=\"%s\" gravity=\"0 0 -9.81\"/>\n"
-           "  <worldbody>\n",
-           dt, v.integrator);
-  x += b;
-  for (int i = 0; i < 6; ++i) {
-    std::string ind(4 + 2 * i, ' ');
-    if (i == 0) {
-      x += ind + "<body name=\"link1\">\n";
-    } else {
-      snprintf(b, sizeof b,
-               "%s<body name=\"link%d\" pos=\"%.12g 0 %.12g\" quat=\"%.12g %.12g 0 0\">\n",
-               ind.c_str(), i + 1, a[i - 1], d[i - 1], std::cos(alpha[i - 1] / 2),
-               std::sin(alpha[i - 1] / 2));
-      x += b;
-    }
-
-    // link i's inertial in body i: p = (a, 0, d) + R c, I_b = R I R^T with R = Rx(α)
-    double ca = std::cos(alpha[i]), sa = std::sin(alpha[i]);
-    double R[3][3] = {{1, 0, 0}, {0, ca, -sa}, {0, sa, ca}};
-    const double *in = inertia[i];
-    double I[3][3] = {{in[0], in[3], in[4]}, {in[3], in[1], in[5]}, {in[4], in[5], in[2]}};
-    double p[3] = {a[i], 0, d[i]}, Ib[3][3] = {};
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) {
-        p[r] += R[r][c] * com[i][c];
-        for (int k = 0; k < 3; ++k) {
-          for (int l = 0; l < 3; ++l) {
-            Ib[r][c] += R[r][k] * I[k][l] * R[c][l] * 1e-4;
-          }
-        }
-      }
-    }
-
-    // cos(π/2) leaves 1e-20-sized crumbs; zero them so the MJCF reads like the table
-    for (int r = 0; r < 3; ++r) {
-      p[r] = std::fabs(p[r]) < 1e-15 ? 0.0 : p[r];
-      for (int c = 0; c < 3; ++c) {
-        Ib[r][c] = std::fabs(Ib[r][c]) < 1e-15 ? 0.0 : Ib[r][c];
-      }
-    }
-    snprintf(b, sizeof b,
-             "%s  <joint name=\"j%d\" axis=\"0 0 1\" range=\"-6.2832 6.2832\" armature=\"%g\" "
-             "damping=\"%g\" frictionloss=\"%g\"/>\n"
-             "%s  <inertial pos=\"%.12g %.12g %.12g\" mass=\"%g\" "
-             "fullinertia=\"%.12g %.12g %.12g %.12g %.12g %.12g\"/>\n"
-             "%s  <geom type=\"capsule\" fromto=\"0 0 0 %.12g 0 %.12g\" size=\"0.04\" "
-             "contype=\"0\" conaffinity=\"0\"/>\n",
-             ind.c_str(), i + 1, armature[i], damping[i], v.frictionloss ? damping[i] : 0.0,
-             ind.c_str(), p[0], p[1], p[2], mass[i], Ib[0][0], Ib[1][1], Ib[2][2], Ib[0][1],
-             Ib[0][2], Ib[1][2], ind.c_str(), a[i], d[i]);
-    x += b;
-  }
-  for (int i = 5; i >= 0; --i) {
-    x += std::string(4 + 2 * i, ' ') + "</body>\n";
-  }
-  x += "  </worldbody>\n  <actuator>\n";
-  for (int i = 0; i < 6; ++i) {
-    snprintf(b, sizeof b,
-             "    <position joint=\"j%d\" kp=\"%g\" kv=\"%g\" forcelimited=\"true\" "
-             "forcerange=\"-%g %g\"/>\n",
-             i + 1, kp[i], kv[i], tmax[i], tmax[i]);
-    x += b;
-  }
-  x += "  </actuator>\n</mujoco>\n";
-  return x;
-}
-
-struct MjRun {
-  const MjVariant *variant = nullptr;
-  double dt = 0;
-  std::string status = "ok";
-  std::string error;
-  Stats stats;
-  double max_track_err = 0;
-};
-
-// mj_loadXML wants a file: write the MJCF to a private temp file and remove it right away
-void *mj_load_string(const MjApi &mj, const std::string &xml, std::string *err) {
-  const char *tmp = getenv("TMPDIR");
-  std::string path = std::string(tmp && *tmp ? tmp : "/tmp") + "/urt_bench_XXXXXX.xml";
-  std::vector<char> buf(path.begin(), path.end());
-  buf.push_back('\0');
-  int fd = mkstemps(buf.data(), 4);
-  if (fd < 0) {
-    *err = std::string("mkstemps: ") + strerror(errno);
-    return nullptr;
-  }
-  bool wrote = write(fd, xml.data(), xml.size()) == static_cast<ssize_t>(xml.size());
-  close(fd);
-  char e[1000] = "";
-  void *model = wrote ? mj.load_xml(buf.data(), nullptr, e, sizeof e) : nullptr;
-  unlink(buf.data());
-  if (model == nullptr) {
-    *err = wrote ? std::string("mj_loadXML: ") + e : "cannot write the temporary MJCF";
-  }
-  return model;
-}
-
-// One mj_step workload (variant, dt), stepped in chunks like UrtCase.
-class MjCase {
- public:
-  MjRun r;
-
-  MjCase(const MjApi &mj, const Options &o, const MjVariant &v, double dt, const Setpoint &sp)
-      : mj_(mj), sp_(sp) {
-    r.variant = &v;
-    r.dt = dt;
-    model_ = mj_load_string(mj, ur5_mjcf(dt, v), &r.error);
-    if (model_ == nullptr) {
-      r.status = "error";
-      return;
-    }
-    data_ = mj.make_data(model_);
-    if (data_ == nullptr) {
-      r.status = "error";
-      r.error = "mj_makeData failed";
-      return;
-    }
-    if (mj.state_size(model_, MjApi::kStateQpos) != URT_NJ ||
-        mj.state_size(model_, MjApi::kStateCtrl) != URT_NJ) {
-      r.status = "error";
-      r.error = "unexpected nq/nu in the generated model";
-      return;
-    }
-
-    // start at the same q0 as urt, servo set-point there
-    mj.set_state(model_, data_, sp.q0, MjApi::kStateQpos);
-    mj.set_state(model_, data_, sp.q0, MjApi::kStateCtrl);
-    samples_.assign(static_cast<size_t>(o.steps), 0);
-  }
-
-  MjCase(const MjCase &) = delete;
-  MjCase &operator=(const MjCase &) = delete;
-  ~MjCase() {
-    if (data_ != nullptr) {
-      mj_.delete_data(data_);
-    }
-    if (model_ != nullptr) {
-      mj_.delete_model(model_);
-    }
-  }
-
-  bool ok() const { return r.status == "ok"; }
-
-  // Advance n steps. Only mj_step is timed, as for urt_step; ctrl is written between steps.
-  void run(long n, bool timed) {
-    double q[URT_NJ], qd[URT_NJ], qdd[URT_NJ], qpos[URT_NJ];
-    for (long k = 0; k < n; ++k) {
-      sp_.at(static_cast<double>(steps_++) * r.dt, q, qd, qdd);
-      mj_.set_state(model_, data_, q, MjApi::kStateCtrl);
-      int64_t t0 = now_ns();
-      mj_.step(model_, data_);
-      int64_t t1 = now_ns();
-      if (!timed || done_ >= samples_.size()) {
-        continue;
-      }
-      samples_[done_++] = t1 - t0;
-      mj_.get_state(model_, data_, qpos, MjApi::kStateQpos);
-      for (int j = 0; j < URT_NJ; ++j) {
-        r.max_track_err = std::max(r.max_track_err, std::fabs(q[j] - qpos[j]));
-      }
-    }
-  }
-
-  void finish() {
-    if (!ok()) {
-      return;
-    }
-    if (!std::isfinite(r.max_track_err)) {
-      r.status = "error";
-      r.error = "state became non-finite";
-    }
-    samples_.resize(done_);
-    r.stats = summarise(std::move(samples_));
-  }
-
- private:
-  const MjApi &mj_;
-  Setpoint sp_;
-  void *model_ = nullptr;
-  void *data_ = nullptr;
-  std::vector<int64_t> samples_;
-  size_t done_ = 0;
-  long steps_ = 0;
 };
 
 //---- JSON ----
@@ -1052,9 +667,6 @@ void print_table(const Options &o, const Report &rep) {
   }
 }
 
-// UR5 "home" used for MuJoCo when the core is skipped or fails to load
-const double kFallbackQ0[URT_NJ] = {0, -M_PI / 2, M_PI / 2, -M_PI / 2, -M_PI / 2, 0};
-
 }  // namespace
 }  // namespace urt::tools
 
@@ -1088,32 +700,19 @@ int main(int argc, char **argv) {
   Report rep;
   rep.clock_overhead_ns = clock_overhead_ns();
 
-  // urt_step at every rate; the first successful load also gives q0 and limits for MuJoCo
+  // urt_step at every rate
   std::vector<std::unique_ptr<UrtCase>> urt_cases;
-  Setpoint sp{};
-  bool have_sp = false;
   if (o.skip_urt) {
     rep.urt_status = "skipped";
   } else {
     for (double dt : o.dts) {
       urt_cases.push_back(std::make_unique<UrtCase>(o, dt, &rep.arm));
-      const UrtCase &c = *urt_cases.back();
-      if (c.ok() && !have_sp) {
-        sp = c.setpoint();
-        have_sp = true;
-      }
     }
   }
-  if (!have_sp) {
-    double lo[URT_NJ], hi[URT_NJ], qd[URT_NJ], qdd[URT_NJ];
-    for (int j = 0; j < URT_NJ; ++j) {
-      lo[j] = -2 * M_PI;
-      hi[j] = 2 * M_PI;
-      qd[j] = M_PI;
-      qdd[j] = 10;
-    }
-    sp = make_setpoint(kFallbackQ0, lo, hi, qd, qdd, o.speed);
-  }
+
+  // MuJoCo gets the same arm, drives' inertia and friction, and set-point, from the same file
+  std::string model_err;
+  ModelPtr mj_model = load_model(o, 0.0, &model_err);
 
   // mj_step on the same set-point; never fatal
   MjApi mj;
@@ -1127,11 +726,15 @@ int main(int argc, char **argv) {
   } else if (!mj.open(o.mujoco_lib, &mj_err)) {
     rep.mj_status = "unavailable";
     rep.mj_error = mj_err;
+  } else if (!mj_model) {
+    rep.mj_status = "unavailable";
+    rep.mj_error = "no model: " + model_err;
   } else {
     rep.mj_version = mj.version;
+    Setpoint sp = make_setpoint(mj_model.get(), o.speed);
     for (double dt : o.dts) {
       for (const auto &v : kMjVariants) {
-        mj_cases.push_back(std::make_unique<MjCase>(mj, o, v, dt, sp));
+        mj_cases.push_back(std::make_unique<MjCase>(mj, mj_model.get(), v, dt, sp, o.steps));
       }
     }
   }
@@ -1189,7 +792,8 @@ int main(int argc, char **argv) {
 
   if (!o.mjcf_out.empty()) {
     FILE *f = fopen(o.mjcf_out.c_str(), "w");
-    if (f == nullptr || fputs(ur5_mjcf(o.dts.front(), kMjVariants[0]).c_str(), f) < 0) {
+    if (f == nullptr || !mj_model ||
+        fputs(mjcf_from_model(mj_model.get(), o.dts.front(), kMjVariants[0]).c_str(), f) < 0) {
       fprintf(stderr, "urt_bench: cannot write %s\n", o.mjcf_out.c_str());
     }
     if (f != nullptr) {
