@@ -1,0 +1,189 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * core/include/urt/controller.h — the UR controller's motion layer, run on the physics thread
+ * at the controller rate (500 Hz e-Series, 125 Hz CB3).
+ *
+ *   urt_ctrl_cmd_t (values, through a ring) ──urt_ctrl_apply()──▶ urt_ctrl_t
+ *   every controller period:  urt_ctrl_tick()  plans the set-point at the end of the period
+ *   every physics step:       urt_ctrl_setpoint(s)  interpolates it (cubic Hermite in time)
+ *                             into the urt_command_t the drives follow.
+ *
+ * Robot mode, safety mode and program state follow a real controller (protocols.md §2.8):
+ * POWER_OFF → (power on) IDLE → (brake release) RUNNING; NORMAL ↔ PROTECTIVE_STOP.
+ * Motion is accepted only in RUNNING + NORMAL; anything else refuses the command and reports it.
+ */
+#ifndef URT_CONTROLLER_H
+#define URT_CONTROLLER_H
+
+#include <stdint.h>
+
+#include "urt/data.h"
+#include "urt/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Robot mode (protocols.md §2.8.1). */
+enum {
+  URT_ROBOT_MODE_NO_CONTROLLER = -1,
+  URT_ROBOT_MODE_DISCONNECTED = 0,
+  URT_ROBOT_MODE_CONFIRM_SAFETY = 1,
+  URT_ROBOT_MODE_BOOTING = 2,
+  URT_ROBOT_MODE_POWER_OFF = 3,
+  URT_ROBOT_MODE_POWER_ON = 4,
+  URT_ROBOT_MODE_IDLE = 5,
+  URT_ROBOT_MODE_BACKDRIVE = 6,
+  URT_ROBOT_MODE_RUNNING = 7
+};
+
+/* Safety mode / safety status (protocols.md §2.8.2–3). */
+enum {
+  URT_SAFETY_MODE_NORMAL = 1,
+  URT_SAFETY_MODE_REDUCED = 2,
+  URT_SAFETY_MODE_PROTECTIVE_STOP = 3,
+  URT_SAFETY_MODE_RECOVERY = 4,
+  URT_SAFETY_MODE_SAFEGUARD_STOP = 5,
+  URT_SAFETY_MODE_FAULT = 9
+};
+
+/* Program (runtime) state (protocols.md §2.8.4). */
+enum {
+  URT_PROGRAM_STOPPING = 0,
+  URT_PROGRAM_STOPPED = 1,
+  URT_PROGRAM_PLAYING = 2,
+  URT_PROGRAM_PAUSING = 3,
+  URT_PROGRAM_PAUSED = 4,
+  URT_PROGRAM_RESUMING = 5
+};
+
+/* Joint mode (protocols.md §2.8.5). */
+enum {
+  URT_JOINT_MODE_BACKDRIVE = 238,
+  URT_JOINT_MODE_POWER_OFF = 239,
+  URT_JOINT_MODE_RUNNING = 253,
+  URT_JOINT_MODE_IDLE = 255
+};
+
+/* What the motion generator is doing. */
+typedef enum urt_ctrl_motion {
+  URT_MOTION_IDLE = 0,   /* holding the last set-point                          */
+  URT_MOTION_MOVEJ,      /* joint-space trapezoid                               */
+  URT_MOTION_MOVEL,      /* Cartesian straight line, IK every tick              */
+  URT_MOTION_SERVOJ,     /* online servo toward a streamed joint target          */
+  URT_MOTION_SPEEDJ,     /* joint velocity ramp                                  */
+  URT_MOTION_SPEEDL,     /* tool velocity ramp, resolved through the Jacobian    */
+  URT_MOTION_STOP,       /* decelerating to rest (stopj/stopl, end of servo/speed) */
+  URT_MOTION_DIRECT      /* external joint set-points (LCM command channel)      */
+} urt_ctrl_motion_t;
+
+/* One command into the controller: a value, never a pointer. */
+typedef enum urt_ctrl_cmd_kind {
+  URT_CTRL_NONE = 0,
+  /* motion (each carries id: the program waits until snapshot.motion_done_id >= id) */
+  URT_CTRL_MOVEJ,        /* q[6], a, v, t (t > 0 overrides a and v), r (0: stop at target) */
+  URT_CTRL_MOVEL,        /* pose[6], a, v, t, r                                  */
+  URT_CTRL_SERVOJ,       /* q[6], t, lookahead_time, gain                          */
+  URT_CTRL_SPEEDJ,       /* qd[6], a, t (t <= 0: until replaced)                   */
+  URT_CTRL_SPEEDL,       /* xd[6], a, a_rot, t                                     */
+  URT_CTRL_STOPJ,        /* a                                                      */
+  URT_CTRL_STOPL,        /* a (tool deceleration, converted to joints)             */
+  URT_CTRL_DIRECT,       /* q[6], qd[6], tau[6]: external set-point (LCM)          */
+  /* I/O and settings */
+  URT_CTRL_SET_DIGITAL_OUT,   /* index 0..17 (standard 0–7, configurable 8–15, tool 16–17), value */
+  URT_CTRL_SET_ANALOG_OUT,    /* index 0..1, value [0..1]                                   */
+  URT_CTRL_SET_SPEED_SLIDER,  /* value [0..1]                                               */
+  URT_CTRL_SET_TCP,           /* pose[6]                                                    */
+  URT_CTRL_SET_PAYLOAD,       /* value = mass [kg], pose[0..2] = CoG [m]                    */
+  /* robot state machine */
+  URT_CTRL_POWER_ON,
+  URT_CTRL_POWER_OFF,
+  URT_CTRL_BRAKE_RELEASE,
+  URT_CTRL_UNLOCK_PSTOP,
+  URT_CTRL_PROGRAM_STATE,     /* index = URT_PROGRAM_* (set by the program runner)          */
+  URT_CTRL_HALT               /* stop motion now at a (program stopped): like stopj         */
+} urt_ctrl_cmd_kind_t;
+
+typedef struct urt_ctrl_cmd {
+  int32_t kind;          /* urt_ctrl_cmd_kind_t                        */
+  int32_t index;         /* I/O index or program state                 */
+  uint64_t id;           /* motion id, increasing per producer; 0 for non-motion */
+  double q[URT_NJ];      /* joint target [rad], or joint speeds [rad/s] for speedj */
+  double pose[6];        /* pose p[x y z rx ry rz] or tool speed [m/s, rad/s]       */
+  double tau[URT_NJ];    /* torque feed-forward [N m] (DIRECT)         */
+  double qd[URT_NJ];     /* velocity feed-forward [rad/s] (DIRECT)     */
+  double a, v, t, r;     /* acceleration, speed, time, blend radius    */
+  double a_rot;          /* rotational acceleration (speedl, stopl)    */
+  double lookahead_time; /* servoj                                     */
+  double gain;           /* servoj                                     */
+  double value;          /* digital/analog value, slider, payload mass */
+} urt_ctrl_cmd_t;
+
+/* Why the controller refused or aborted something (bits in urt_ctrl_t.fault, copied to the
+ * snapshot so the program runner can report it as a runtime error / protective stop). */
+enum {
+  URT_CTRL_FAULT_NOT_RUNNING = 1u << 0,    /* motion while not RUNNING+NORMAL            */
+  URT_CTRL_FAULT_BAD_TARGET = 1u << 1,     /* NaN/Inf or out-of-limit target → pstop     */
+  URT_CTRL_FAULT_IK = 1u << 2,             /* no inverse-kinematics solution             */
+  URT_CTRL_FAULT_BAD_ARGUMENT = 1u << 3,   /* a, v, t, gain… outside the allowed range   */
+  URT_CTRL_FAULT_PSTOP = 1u << 4           /* the physics entered a protective stop      */
+};
+
+typedef struct urt_ctrl {
+  double period;              /* controller period [s] (0.002 or 0.008)          */
+  int n_sub;                  /* physics steps per period (period / m->dt)       */
+  uint64_t tick;              /* controller ticks since start                     */
+
+  /* robot state machine */
+  int32_t robot_mode, safety_mode, program_state;
+  uint32_t fault;             /* URT_CTRL_FAULT_* of the most recent refusal (sticky until next motion) */
+
+  /* I/O and settings */
+  uint32_t digital_out;       /* bits 0–7 standard, 8–15 configurable, 16–17 tool */
+  double analog_out[2];
+  double speed_slider;        /* [0..1] target speed fraction                     */
+  double speed_scaling;       /* actual scaling applied by the trajectory         */
+  double tcp_offset[6];
+  double payload_mass, payload_cog[3];
+
+  /* motion generator */
+  urt_ctrl_motion_t motion;
+  uint64_t motion_id;         /* id of the motion being executed (0 none)          */
+  uint64_t motion_done_id;    /* highest id finished (or aborted)                  */
+  double seg_time;            /* time into the current motion [s]                  */
+  urt_ctrl_cmd_t active;      /* the command being executed                        */
+  double plan[64];            /* motion-specific plan (trapezoid phases, line, …)  */
+
+  /* set-points: at the start (0) and end (1) of the current period; the physics steps
+   * interpolate between them */
+  double q0[URT_NJ], qd0[URT_NJ], qdd0[URT_NJ];
+  double q1[URT_NJ], qd1[URT_NJ], qdd1[URT_NJ];
+  double tau_ff[URT_NJ];      /* external torque feed-forward (DIRECT)             */
+} urt_ctrl_t;
+
+/* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or
+ * POWER_OFF (powered = 0), program STOPPED. period must be a whole number of m->dt.
+ * Context: init. Returns 0 or URT_EINVAL. */
+int urt_ctrl_init(const urt_model_t *m, urt_ctrl_t *c, const urt_data_t *d, double period,
+                  int powered);
+
+/* Apply one command (called for every command drained from the rings, before the tick).
+ * Invalid commands set c->fault and, for bad targets, a protective stop. Context: RT. */
+void urt_ctrl_apply(const urt_model_t *m, urt_ctrl_t *c, urt_data_t *d, const urt_ctrl_cmd_t *cmd);
+
+/* Plan the next period: advance the motion generator by c->period, producing q1/qd1/qdd1.
+ * Follows the physics' protective stop (d->pstop) into PROTECTIVE_STOP. Context: RT. */
+void urt_ctrl_tick(const urt_model_t *m, urt_ctrl_t *c, urt_data_t *d);
+
+/* The drive command at physics step k (0..n_sub-1) of the current period. Context: RT. */
+void urt_ctrl_setpoint(const urt_model_t *m, const urt_ctrl_t *c, int k, urt_command_t *out);
+
+/* Inverse kinematics of the calibrated model: joint positions q reaching TCP pose (base frame,
+ * axis-angle) closest to qnear. Context: RT (bounded iterations, no allocation).
+ * Returns 0, or URT_ERANGE when no solution within 1e-10 m / 1e-10 rad exists. */
+int urt_ctrl_inverse_kinematics(const urt_model_t *m, const double pose[6],
+                                const double qnear[URT_NJ], double q[URT_NJ]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,100 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * core/include/urt/loop.h — the hard real-time loop: one physics thread that owns the model's
+ * data and the controller, keeps simulation time locked to wall time, drains command rings and
+ * publishes one snapshot per controller tick.
+ *
+ *   producers (one ring each) ──urt_loop_submit()──▶ [physics thread] ──▶ snapshot history
+ *   readers: urt_loop_wait() for a new tick, then urt_loop_read(tick) — never blocking the writer.
+ *
+ * The physics thread never allocates, locks, blocks (other than its own pacing sleep) or prints.
+ */
+#ifndef URT_LOOP_H
+#define URT_LOOP_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "urt/controller.h"
+#include "urt/model.h"
+#include "urt/snapshot.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum urt_pacing {
+  URT_PACING_TICK = 0,   /* wake at each controller period (absolute clock_nanosleep), run its steps */
+  URT_PACING_STEP,       /* wake once per physics step (isolated cores, PREEMPT_RT)                 */
+  URT_PACING_FREE,       /* as fast as possible                                                     */
+  URT_PACING_LOCKSTEP    /* a tick only when granted by urt_loop_grant()                            */
+} urt_pacing_t;
+
+#define URT_LOOP_HISTORY 512       /* snapshots kept (about 1 s at 500 Hz) */
+#define URT_LOOP_MAX_PRODUCERS 8   /* command rings */
+#define URT_LOOP_RING_CAPACITY 256 /* commands per ring */
+
+typedef struct urt_loop_config {
+  double period;         /* controller period [s]: 0.002 e-Series, 0.008 CB3 */
+  urt_pacing_t pacing;
+  int powered;           /* 1: boot RUNNING + NORMAL; 0: POWER_OFF            */
+  int rt_priority;       /* SCHED_FIFO priority, 0: do not ask                */
+  int lock_memory;       /* 1: best-effort mlockall + stack prefault          */
+} urt_loop_config_t;
+
+typedef struct urt_loop urt_loop_t;
+
+/* Build a loop around a loaded model, at rest at q0 (NULL: m->q0). Context: non-RT.
+ * Returns 0 or URT_EINVAL (period not a whole number of m->dt) / URT_ENOMEM / URT_ESOLVER;
+ * err receives a message. Nullable: q0, err. */
+int urt_loop_create(const urt_model_t *m, const urt_loop_config_t *cfg, const double *q0,
+                    urt_loop_t **out, char *err, size_t err_sz);
+
+/* Start the physics thread. Warnings (no SCHED_FIFO, no mlockall) go to stderr, never fail.
+ * Returns 0 or URT_EIO. */
+int urt_loop_start(urt_loop_t *l);
+
+/* Stop and join the physics thread (idempotent). Then free with urt_loop_destroy. */
+void urt_loop_stop(urt_loop_t *l);
+void urt_loop_destroy(urt_loop_t *l);
+
+const urt_model_t *urt_loop_model(const urt_loop_t *l);
+double urt_loop_period(const urt_loop_t *l);
+
+/* Claim a command ring for the calling producer thread (one ring per producer thread).
+ * Returns a producer index ≥ 0 or URT_ENOSPC. Context: non-RT, before or after start. */
+int urt_loop_add_producer(urt_loop_t *l, const char *name);
+
+/* Push one command; drained by the physics thread at the start of the next tick.
+ * Never waits: returns false (and counts it) when that ring is full. */
+bool urt_loop_submit(urt_loop_t *l, int producer, const urt_ctrl_cmd_t *cmd);
+
+/* Tick of the newest published snapshot (0 before the first). Context: any. */
+uint64_t urt_loop_latest_tick(const urt_loop_t *l);
+
+/* Copy the snapshot of a given tick. Returns 0, URT_EAGAIN (not published yet) or URT_ERANGE
+ * (already overwritten: the reader fell more than URT_LOOP_HISTORY ticks behind).
+ * Context: any reader thread. */
+int urt_loop_read(const urt_loop_t *l, uint64_t tick, urt_snapshot_t *out);
+
+/* Copy the newest snapshot. Returns its tick. */
+uint64_t urt_loop_read_latest(const urt_loop_t *l, urt_snapshot_t *out);
+
+/* Sleep until a snapshot newer than after_tick exists or timeout_ms passes (futex; the
+ * physics thread only wakes it, it never waits for it). Returns the newest tick. */
+uint64_t urt_loop_wait(const urt_loop_t *l, uint64_t after_tick, int timeout_ms);
+
+/* Lockstep pacing: allow n more controller ticks. Other pacings ignore it. */
+void urt_loop_grant(urt_loop_t *l, uint64_t n);
+
+/* Loop statistics (any thread). */
+typedef struct urt_loop_stats {
+  uint64_t ticks, overruns, missed_periods, cmd_dropped;
+  double exec_max, exec_last;   /* physics time per period [s] */
+} urt_loop_stats_t;
+void urt_loop_get_stats(const urt_loop_t *l, urt_loop_stats_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
