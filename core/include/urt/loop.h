@@ -40,7 +40,24 @@ typedef struct urt_loop_config {
   int powered;           /* 1: boot RUNNING + NORMAL; 0: POWER_OFF            */
   int rt_priority;       /* SCHED_FIFO priority, 0: do not ask                */
   int lock_memory;       /* 1: best-effort mlockall + stack prefault          */
+  double drive_rate;     /* drive samples per second (0: none), at most 1/m->dt */
 } urt_loop_config_t;
+
+/* The drive internals at a rate set apart from the controller's (up to 1 kHz and more),
+ * for the LCM drive message and PHM research. */
+typedef struct urt_drive_sample {
+  uint64_t seq;                     /* sample number since start (1, 2, …)   */
+  double time;                      /* physics time                [s]       */
+  double q[URT_NJ], qd[URT_NJ];     /* joint position, speed [rad, rad/s]    */
+  double motor_angle[URT_NJ], motor_speed[URT_NJ];  /* q_M, q̇_M [rad, rad/s] */
+  double i[URT_NJ], i_ref[URT_NJ];  /* motor current, its reference [A]      */
+  double v[URT_NJ];                 /* motor voltage               [V]       */
+  double gear_in_torque[URT_NJ];    /* wave-generator input T_in   [N m]     */
+  double gear_out_torque[URT_NJ];   /* circular-spline output T_CS [N m]     */
+  double friction_torque[URT_NJ];   /* LuGre T_f                   [N m]     */
+  double flex_x[URT_NJ], flex_y[URT_NJ];  /* flexspline deflection [m]       */
+  double bristle_z[URT_NJ];         /* LuGre z                     [rad]     */
+} urt_drive_sample_t;
 
 typedef struct urt_loop urt_loop_t;
 
@@ -83,6 +100,10 @@ uint64_t urt_loop_read_latest(const urt_loop_t *l, urt_snapshot_t *out);
 /* Sleep until a snapshot newer than after_tick exists or timeout_ms passes (futex; the
  * physics thread only wakes it, it never waits for it). Returns the newest tick. */
 uint64_t urt_loop_wait(const urt_loop_t *l, uint64_t after_tick, int timeout_ms);
+
+/* Drive samples, as for snapshots: newest seq, copy one (0 / URT_EAGAIN / URT_ERANGE). */
+uint64_t urt_loop_latest_drive(const urt_loop_t *l);
+int urt_loop_read_drive(const urt_loop_t *l, uint64_t seq, urt_drive_sample_t *out);
 
 /* Lockstep pacing: allow n more controller ticks. Other pacings ignore it. */
 void urt_loop_grant(urt_loop_t *l, uint64_t n);
