@@ -1,0 +1,167 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/lcm/lcm_sender.c — status and drive messages from loop data, commands into the
+ * controller. Pure: no socket, clock, thread or global. */
+#include "urt/net/lcm_sender.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "urt/errors.h"
+
+#define COPY6(dst, src) memcpy((dst), (src), 6 * sizeof(double))
+
+//---- status and drive -------------------------------------------------------------------------
+
+void urt_lcm_status_fill(const urt_snapshot_t *s, int64_t publish_utime, int64_t ticks_lost,
+                         urtwin_lcmt_urtwin_status *msg) {
+  // time: the controller's clock in microseconds, like Drake's simulated status
+  msg->utime = (int64_t)llround(s->time * 1e6);
+  msg->tick = (int64_t)s->tick;
+  msg->time = s->time;
+  msg->period = s->period;
+  msg->publish_utime = publish_utime;
+  msg->ticks_lost = ticks_lost;
+
+  // joints: target, then actual
+  COPY6(msg->q_target, s->q_target);
+  COPY6(msg->qd_target, s->qd_target);
+  COPY6(msg->qdd_target, s->qdd_target);
+  COPY6(msg->q_actual, s->q);
+  COPY6(msg->qd_actual, s->qd);
+  COPY6(msg->qdd_actual, s->qdd);
+
+  // motor currents, torques, voltage, temperature
+  COPY6(msg->current_actual, s->i_actual);
+  COPY6(msg->current_target, s->i_target);
+  COPY6(msg->current_control, s->i_control);
+  COPY6(msg->torque_actual, s->tau);
+  COPY6(msg->torque_target, s->m_target);
+  COPY6(msg->voltage_actual, s->v_actual);
+  COPY6(msg->temperature, s->temperature);
+
+  // tool
+  COPY6(msg->tcp_pose_actual, s->tcp_pose);
+  COPY6(msg->tcp_pose_target, s->tcp_pose_target);
+  COPY6(msg->tcp_speed_actual, s->tcp_speed);
+  COPY6(msg->tcp_speed_target, s->tcp_speed_target);
+  COPY6(msg->tcp_force, s->tcp_force);
+
+  // modes
+  msg->robot_mode = s->robot_mode;
+  msg->safety_mode = s->safety_mode;
+  msg->program_state = s->program_state;
+  for (int j = 0; j < 6; ++j) {
+    msg->joint_mode[j] = s->joint_mode[j];
+  }
+  msg->motion = s->motion;
+  msg->ctrl_fault = (int32_t)s->ctrl_fault;
+  msg->pstop = (int32_t)s->pstop;
+  msg->speed_scaling = s->speed_scaling;
+
+  // loop diagnostics
+  msg->exec_time = s->exec_time;
+  msg->overruns = (int64_t)s->overruns;
+  msg->missed_periods = (int64_t)s->missed_periods;
+}
+
+void urt_lcm_drive_fill(const urt_drive_sample_t *d, int64_t samples_lost,
+                        urtwin_lcmt_urtwin_drive *msg) {
+  msg->utime = (int64_t)llround(d->time * 1e6);
+  msg->seq = (int64_t)d->seq;
+  msg->time = d->time;
+  msg->samples_lost = samples_lost;
+  COPY6(msg->q, d->q);
+  COPY6(msg->qd, d->qd);
+  COPY6(msg->motor_angle, d->motor_angle);
+  COPY6(msg->motor_speed, d->motor_speed);
+  COPY6(msg->current, d->i);
+  COPY6(msg->current_reference, d->i_ref);
+  COPY6(msg->voltage, d->v);
+  COPY6(msg->gear_input_torque, d->gear_in_torque);
+  COPY6(msg->gear_output_torque, d->gear_out_torque);
+  COPY6(msg->friction_torque, d->friction_torque);
+  COPY6(msg->bristle_z, d->bristle_z);
+  COPY6(msg->flexspline_x, d->flex_x);
+  COPY6(msg->flexspline_y, d->flex_y);
+}
+
+//---- commands ---------------------------------------------------------------------------------
+
+static int all_finite(const double *x, int n) {
+  for (int i = 0; i < n; ++i) {
+    if (!isfinite(x[i])) {
+      return 0;
+    }
+  }
+  return 1;
+}
+
+// an optional per-joint array: count 0 (absent) or 6 with data
+static int optional_ok(int32_t n, const double *x) {
+  return n == 0 || (n == URT_NJ && x != NULL);
+}
+
+int urt_lcm_command_to_ctrl(const urtwin_lcmt_urtwin_command *msg, uint64_t id,
+                            urt_ctrl_cmd_t *out) {
+  // shape: six positions, velocities and torques optional
+  if (msg->num_joints != URT_NJ || msg->joint_position == NULL ||
+      !optional_ok(msg->num_velocities, msg->joint_velocity) ||
+      !optional_ok(msg->num_torques, msg->joint_torque)) {
+    return URT_EPROTO;
+  }
+
+  // values: a NaN must never reach the controller's set-point
+  if (!all_finite(msg->joint_position, URT_NJ) ||
+      !all_finite(msg->joint_velocity, msg->num_velocities) ||
+      !all_finite(msg->joint_torque, msg->num_torques)) {
+    return URT_ERANGE;
+  }
+
+  urt_ctrl_cmd_t c;
+  memset(&c, 0, sizeof c);
+  c.kind = URT_CTRL_DIRECT;
+  c.id = id;
+  memcpy(c.q, msg->joint_position, URT_NJ * sizeof(double));
+  if (msg->num_velocities == URT_NJ) {
+    memcpy(c.qd, msg->joint_velocity, URT_NJ * sizeof(double));
+  }
+  if (msg->num_torques == URT_NJ) {
+    memcpy(c.tau, msg->joint_torque, URT_NJ * sizeof(double));
+  }
+  *out = c;
+  return 0;
+}
+
+static int32_t be32_at(const uint8_t *p) {
+  return (int32_t)((uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 |
+                   (uint32_t)p[3]);
+}
+
+int urt_lcm_command_decode(const void *buf, size_t len, uint64_t id, urt_ctrl_cmd_t *out) {
+  const uint8_t *b = (const uint8_t *)buf;
+
+  // walk the three counts before the generated decoder sees them: it would allocate whatever
+  // a peer's count asks for (layout: hash 8, utime 8, then count 4 + 8·count, three times)
+  size_t off = 16;
+  for (int k = 0; k < 3; ++k) {
+    if (len < off + 4) {
+      return URT_EPROTO;
+    }
+    int32_t n = be32_at(b + off);
+    if (n != URT_NJ && !(k > 0 && n == 0)) {
+      return URT_EPROTO;
+    }
+    off += 4 + 8 * (size_t)n;
+  }
+  if (off != len || len > (size_t)INT32_MAX) {
+    return URT_EPROTO;
+  }
+
+  // decode (checks the fingerprint), then the same checks as for an in-memory message
+  urtwin_lcmt_urtwin_command msg;
+  memset(&msg, 0, sizeof msg);
+  int used = urtwin_lcmt_urtwin_command_decode(buf, 0, (int)len, &msg);
+  int rc = used == (int)len ? urt_lcm_command_to_ctrl(&msg, id, out) : URT_EPROTO;
+  urtwin_lcmt_urtwin_command_decode_cleanup(&msg);
+  return rc;
+}
