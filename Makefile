@@ -4,7 +4,8 @@
 #   make test   every test: CMocka under ctest (twice: release, then clang ASan/UBSan), the
 #               libFuzzer targets for FUZZ_SECONDS each under ASan/UBSan, then pytest
 #   make fuzz   the libFuzzer targets for longer (FUZZ_SECONDS=600 each)
-#   make bench  urt_step against MuJoCo mj_step and Pinocchio ABA, writes build/bench.json
+#   make bench  urt_step against MuJoCo mj_step and Pinocchio ABA (build/bench.json), then the
+#               running emulator: 30003 jitter with 8 clients, overruns, memory (bench_ports.json)
 
 SHELL := /bin/bash
 JOBS ?= $(shell nproc)
@@ -82,6 +83,7 @@ test-python: build
 # ---- benchmarks and tools --------------------------------------------------------------
 bench: build
 	URT_BUILD=$(abspath build) $(PY) tools/bench.py --out build/bench.json
+	URT_BUILD=$(abspath build) $(PY) tools/bench_ports.py --out build/bench_ports.json
 
 # the full 10 s excitation comparison against CVODE, noise off, at 20 and 10 kHz (slow: about
 # 7 minutes each on one core)
