@@ -1,8 +1,11 @@
 # SPDX-License-Identifier: Apache-2.0
 # urtwin — thin wrapper over CMake. Every target installs what is missing first (deps).
-#   make run    build and start the emulator with config/ur5.yaml (the physics runner for now)
-#   make test   every test: CMocka under ctest (twice: release and ASan/UBSan), then pytest
-#   make bench  urt_step against MuJoCo mj_step and Pinocchio ABA, writes build/bench.json
+#   make run    build and start the emulator (urtwin) with config/ur5.yaml on 127.0.0.1
+#   make test   every test: CMocka under ctest (twice: release, then clang ASan/UBSan), the
+#               libFuzzer targets for FUZZ_SECONDS each under ASan/UBSan, then pytest
+#   make fuzz   the libFuzzer targets for longer (FUZZ_SECONDS=600 each)
+#   make bench  urt_step against MuJoCo mj_step and Pinocchio ABA (build/bench.json), then the
+#               running emulator: 30003 jitter with 8 clients, overruns, memory (bench_ports.json)
 
 SHELL := /bin/bash
 JOBS ?= $(shell nproc)
@@ -12,8 +15,8 @@ APT_PACKAGES := build-essential cmake pkg-config libeigen3-dev libsundials-dev l
   libyaml-cpp-dev liblcm-dev liblcm-bin cyclonedds-dev cyclonedds-tools libcli11-dev \
   python3 python3-venv python3-pip clang libclang-rt-14-dev
 
-.PHONY: all deps apt venv build build-asan test test-unit test-asan test-python bench run clean \
-  reference-compare plots
+.PHONY: all deps apt venv build build-asan test test-unit test-asan test-fuzz test-python bench run \
+  clean fuzz reference-compare plots
 
 all: build
 
@@ -43,12 +46,14 @@ build: deps
 	cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DURT_PYTHON=$(abspath $(PY)) >/dev/null
 	cmake --build build -j $(JOBS)
 
+# clang, because libFuzzer comes with it; no SUNDIALS (the reference is left to the release run)
 build-asan: deps
-	cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DURT_SANITIZE=ON -DURT_BUILD_TOOLS=OFF >/dev/null
+	CC=clang CXX=clang++ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DURT_SANITIZE=ON \
+	  -DURT_FUZZ=ON -DURT_WITH_SUNDIALS=OFF -DURT_BUILD_TOOLS=OFF >/dev/null
 	cmake --build build-asan -j $(JOBS)
 
 # ---- tests -----------------------------------------------------------------------------
-test: test-unit test-asan test-python
+test: test-unit test-asan test-fuzz test-python
 
 test-unit: build
 	ctest --test-dir build --output-on-failure -j $(JOBS)
@@ -58,12 +63,27 @@ test-asan: build-asan
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
 	  ctest --test-dir build-asan --output-on-failure -j $(JOBS) -E '^reference/'
 
+# every libFuzzer target for FUZZ_SECONDS under ASan/UBSan; corpora persist in build-asan/fuzz-corpus
+FUZZ_SECONDS ?= 30
+test-fuzz: build-asan
+	@set -e; for f in build-asan/tests/fuzz/fuzz_*; do \
+	  [ -x "$$f" ] || continue; n=$$(basename $$f); mkdir -p build-asan/fuzz-corpus/$$n; \
+	  echo "fuzz: $$n for $(FUZZ_SECONDS) s"; \
+	  $$f -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
+	    build-asan/fuzz-corpus/$$n 2>build-asan/$$n.log || { tail -40 build-asan/$$n.log; exit 1; }; \
+	  grep -E '^(Done|stat::number_of_executed_units)' build-asan/$$n.log | tail -1; \
+	done
+
+fuzz:
+	$(MAKE) test-fuzz FUZZ_SECONDS=600
+
 test-python: build
 	URT_BUILD=$(abspath build) $(PY) -m pytest -q tests/python
 
 # ---- benchmarks and tools --------------------------------------------------------------
 bench: build
 	URT_BUILD=$(abspath build) $(PY) tools/bench.py --out build/bench.json
+	URT_BUILD=$(abspath build) $(PY) tools/bench_ports.py --out build/bench_ports.json
 
 # the full 10 s excitation comparison against CVODE, noise off, at 20 and 10 kHz (slow: about
 # 7 minutes each on one core)
@@ -79,7 +99,7 @@ plots: build
 	$(PY) tools/plot_run.py build/excitation.csv --out build/plots
 
 run: build
-	build/tools/urt_sim --config config/ur5.yaml --traj pickplace --realtime
+	build/tools/urtwin --config config/ur5.yaml --bind 127.0.0.1
 
 clean:
 	rm -rf build build-asan

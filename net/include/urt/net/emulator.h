@@ -1,0 +1,54 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/include/urt/net/emulator.h — the UR controller's TCP interfaces on top of a running hard
+ * loop: primary 30001, secondary 30002, real-time 30003 (and their read-only twins 30011–30013),
+ * all served by one I/O thread (the single producer of commands from clients), plus the
+ * URScript program runner.
+ *
+ *   hard loop ──snapshots──▶ I/O thread ──▶ 30003 packets every tick, robot state at 10 Hz
+ *   clients ──bytes──▶ script framer ──▶ controller commands (ring) / programs (runner)
+ *   runner ──robot messages──▶ I/O thread ──▶ 30001 clients
+ */
+#ifndef URT_NET_EMULATOR_H
+#define URT_NET_EMULATOR_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "urt/loop.h"
+#include "urt/net/version.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct urt_emulator_config {
+  const char *bind;          /* IPv4 address, default "127.0.0.1"                   */
+  int port_offset;           /* added to every port                                  */
+  urt_version_t version;     /* the emulated controller                              */
+} urt_emulator_config_t;
+
+/* Per-port counters (readable while running, approximately). */
+typedef struct urt_emulator_stats {
+  uint64_t clients;          /* connected now, all ports                             */
+  uint64_t rt_packets;       /* 30003 packets queued, summed over clients            */
+  uint64_t rt_dropped;       /* 30003 packets dropped for clients that do not read   */
+  uint64_t state_messages;   /* robot-state messages queued on 30001/30002           */
+  uint64_t ticks_lost;       /* ticks the I/O thread fell too far behind to stream    */
+  uint64_t scripts;          /* script units received                                */
+} urt_emulator_stats_t;
+
+typedef struct urt_emulator urt_emulator_t;
+
+/* Bind every port (all open or none). Context: non-RT. Returns 0 or URT_EIO (err: which port
+ * and why) / URT_ENOMEM. Nullable: err. */
+int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_emulator_t **out,
+                        char *err, size_t err_sz);
+int urt_emulator_start(urt_emulator_t *e);
+void urt_emulator_stop(urt_emulator_t *e);          /* idempotent; closes every client */
+void urt_emulator_destroy(urt_emulator_t *e);       /* Nullable: e */
+void urt_emulator_get_stats(const urt_emulator_t *e, urt_emulator_stats_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,111 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/server/tcp.c — listeners and connections with bounded output (tcp.h). */
+#define _GNU_SOURCE
+#include "urt/net/tcp.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "urt/errors.h"
+
+int urt_tcp_listen(const char *addr, int port, char *err, size_t err_sz) {
+  struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+  if (inet_pton(AF_INET, addr, &sa.sin_addr) != 1) {
+    snprintf(err, err_sz, "bind %s:%d: not an IPv4 address", addr, port);
+    return URT_EINVAL;
+  }
+  int fd = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) {
+    snprintf(err, err_sz, "socket: %s", strerror(errno));
+    return URT_EIO;
+  }
+  int one = 1;
+  setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+  if (bind(fd, (struct sockaddr *)&sa, sizeof sa) != 0 || listen(fd, 64) != 0) {
+    snprintf(err, err_sz, "bind %s:%d: %s", addr, port, strerror(errno));
+    close(fd);
+    return URT_EIO;
+  }
+  return fd;
+}
+
+urt_tcp_conn_t *urt_tcp_accept(int listen_fd, int port_kind, size_t out_cap) {
+  int fd = accept4(listen_fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
+  if (fd < 0) {
+    return NULL;
+  }
+  int one = 1;
+  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+  urt_tcp_conn_t *c = calloc(1, sizeof *c);
+  uint8_t *out = malloc(out_cap);
+  if (!c || !out) {
+    free(c);
+    free(out);
+    close(fd);
+    return NULL;
+  }
+  c->fd = fd;
+  c->port_kind = port_kind;
+  c->out = out;
+  c->out_cap = out_cap;
+  return c;
+}
+
+size_t urt_tcp_pending(const urt_tcp_conn_t *c) { return c->out_len - c->out_head; }
+
+bool urt_tcp_flush(urt_tcp_conn_t *c) {
+  while (c->out_head < c->out_len) {
+    ssize_t n = send(c->fd, c->out + c->out_head, c->out_len - c->out_head, MSG_NOSIGNAL);
+    if (n > 0) {
+      c->out_head += (size_t)n;
+      continue;
+    }
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+      break;
+    }
+    if (n < 0 && errno == EINTR) {
+      continue;
+    }
+    return false;
+  }
+  if (c->out_head == c->out_len) {
+    c->out_head = c->out_len = 0;
+  }
+  return true;
+}
+
+bool urt_tcp_send(urt_tcp_conn_t *c, const void *msg, size_t len) {
+  if (c->closing) {
+    return false;
+  }
+  if (c->out_cap - c->out_len < len && c->out_head > 0) {
+    // compact: slide the unsent bytes to the front
+    memmove(c->out, c->out + c->out_head, c->out_len - c->out_head);
+    c->out_len -= c->out_head;
+    c->out_head = 0;
+  }
+  if (c->out_cap - c->out_len < len) {
+    c->dropped_msgs++;
+    return false;
+  }
+  memcpy(c->out + c->out_len, msg, len);
+  c->out_len += len;
+  c->sent_msgs++;
+  return true;
+}
+
+void urt_tcp_close(urt_tcp_conn_t *c) {
+  if (!c) {
+    return;
+  }
+  close(c->fd);
+  free(c->out);
+  free(c);
+}

@@ -1,0 +1,150 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * tests/core/test_loop.c — the hard loop: ticks and their snapshots, the history, command
+ * rings, lockstep grants and the drive-sample stream. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "test_model.h"
+#include "test_support.h"
+#include "urt/core.h"
+#include "urt/loop.h"
+
+static urt_model_t *g_model;
+
+static int setup(void **state) {
+  (void)state;
+  g_model = urt_test_model(NULL);
+  return g_model ? 0 : -1;
+}
+
+static int teardown(void **state) {
+  (void)state;
+  urt_model_free(g_model);
+  return 0;
+}
+
+static urt_loop_t *make_loop(urt_pacing_t pacing, double drive_rate) {
+  const urt_model_t *m = g_model;
+  urt_loop_config_t cfg = {.period = 0.002, .pacing = pacing, .powered = 1, .drive_rate = drive_rate};
+  urt_loop_t *l = NULL;
+  char err[256];
+  assert_int_equal(urt_loop_create(m, &cfg, NULL, &l, err, sizeof err), 0);
+  return l;
+}
+
+// A period that is not a whole number of physics steps is refused with a message.
+static void test_loop__refuses_fractional_period(void **state) {
+  (void)state;
+  const urt_model_t *m = g_model;
+  urt_loop_config_t cfg = {.period = 0.00201, .pacing = URT_PACING_FREE};
+  urt_loop_t *l = NULL;
+  char err[256] = "";
+  assert_int_equal(urt_loop_create(m, &cfg, NULL, &l, err, sizeof err), URT_EINVAL);
+  assert_null(l);
+  assert_non_null(strstr(err, "whole number"));
+}
+
+// Tick pacing keeps time locked to the wall clock; every tick is in the history, in order,
+// with its time exactly tick · period.
+static void test_loop__tick_pacing_follows_wall_time(void **state) {
+  (void)state;
+  urt_loop_t *l = make_loop(URT_PACING_TICK, 0);
+  struct timespec t0, t1;
+  clock_gettime(CLOCK_MONOTONIC, &t0);
+  assert_int_equal(urt_loop_start(l), 0);
+  uint64_t seen = 0;
+  urt_snapshot_t s;
+  int gaps = 0;
+  while (seen < 250) {
+    uint64_t newest = urt_loop_wait(l, seen, 1000);
+    assert_true(newest > seen);
+    for (uint64_t k = seen + 1; k <= newest; k++) {
+      if (urt_loop_read(l, k, &s) != 0 || s.tick != k || s.time != k * 0.002) {
+        gaps++;
+      }
+    }
+    seen = newest;
+  }
+  clock_gettime(CLOCK_MONOTONIC, &t1);
+  urt_loop_stop(l);
+  double wall = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
+  print_message("250 ticks at 500 Hz took %.3f s of wall time\n", wall);
+  assert_int_equal(gaps, 0);
+  assert_true(wall > 0.45 && wall < 0.8);
+  // the arm rests at its initial pose
+  urt_loop_read_latest(l, &s);
+  for (int j = 0; j < URT_NJ; j++) {
+    assert_true(fabs(s.q[j] - g_model->q0[j]) < 1e-4);
+  }
+  urt_loop_destroy(l);
+}
+
+// Lockstep: time advances only by the ticks granted.
+static void test_loop__lockstep_runs_only_granted_ticks(void **state) {
+  (void)state;
+  urt_loop_t *l = make_loop(URT_PACING_LOCKSTEP, 0);
+  assert_int_equal(urt_loop_start(l), 0);
+  usleep(50000);
+  assert_int_equal(urt_loop_latest_tick(l), 0);
+  urt_loop_grant(l, 7);
+  assert_int_equal(urt_loop_wait(l, 6, 2000), 7);
+  usleep(50000);
+  assert_int_equal(urt_loop_latest_tick(l), 7);
+  urt_loop_stop(l);
+  urt_loop_destroy(l);
+}
+
+// A command through a producer ring reaches the controller: a digital output shows in the
+// snapshot of a later tick.
+static void test_loop__commands_reach_the_controller(void **state) {
+  (void)state;
+  urt_loop_t *l = make_loop(URT_PACING_FREE, 0);
+  int p = urt_loop_add_producer(l, "test");
+  assert_true(p >= 0);
+  assert_int_equal(urt_loop_start(l), 0);
+  urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_DIGITAL_OUT, .index = 3, .value = 1};
+  assert_true(urt_loop_submit(l, p, &cmd));
+  urt_snapshot_t s;
+  int found = 0;
+  for (int i = 0; i < 2000 && !found; i++) {
+    urt_loop_wait(l, urt_loop_latest_tick(l), 100);
+    urt_loop_read_latest(l, &s);
+    found = (s.digital_out & (1u << 3)) != 0;
+  }
+  urt_loop_stop(l);
+  assert_true(found);
+  assert_false(urt_loop_submit(l, p + 1, &cmd));  // not a producer
+  urt_loop_destroy(l);
+}
+
+// Drive samples come at their own rate: 1 kHz from a 20 kHz physics, consecutive, 1 ms apart.
+static void test_loop__drive_samples_at_their_rate(void **state) {
+  (void)state;
+  urt_loop_t *l = make_loop(URT_PACING_LOCKSTEP, 1000.0);
+  assert_int_equal(urt_loop_start(l), 0);
+  urt_loop_grant(l, 50);  // 0.1 s
+  assert_int_equal(urt_loop_wait(l, 49, 5000), 50);
+  urt_loop_stop(l);
+  uint64_t n = urt_loop_latest_drive(l);
+  assert_int_equal(n, 100);
+  urt_drive_sample_t a, b;
+  assert_int_equal(urt_loop_read_drive(l, 99, &a), 0);
+  assert_int_equal(urt_loop_read_drive(l, 100, &b), 0);
+  assert_true(fabs((b.time - a.time) - 0.001) < 1e-12);
+  assert_int_equal(urt_loop_read_drive(l, 101, &b), URT_EAGAIN);
+  urt_loop_destroy(l);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_loop__refuses_fractional_period),
+      cmocka_unit_test(test_loop__tick_pacing_follows_wall_time),
+      cmocka_unit_test(test_loop__lockstep_runs_only_granted_ticks),
+      cmocka_unit_test(test_loop__commands_reach_the_controller),
+      cmocka_unit_test(test_loop__drive_samples_at_their_rate),
+  };
+  return cmocka_run_group_tests(tests, setup, teardown);
+}

@@ -1,0 +1,196 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Start and stop a real urtwin process for end-to-end tests, and read its wire formats with
+small clean-room decoders written from protocols.md (not from any client library).
+
+Each emulator gets its own loopback address (127.0.0.N): clients such as python-urx hard-code
+the UR ports, and distinct addresses let several emulators and test runs share the host."""
+
+import itertools
+import os
+import signal
+import socket
+import struct
+import subprocess
+import time
+
+BUILD = os.environ.get("URT_BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
+URTWIN = os.path.join(BUILD, "tools", "urtwin")
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+CONFIG = os.path.join(ROOT, "config", "ur5.yaml")
+
+# a different loopback address per emulator started by this process (and per pytest worker)
+_hosts = itertools.count(2 + (os.getpid() % 50) * 4)
+
+
+def next_host():
+    n = next(_hosts)
+    return f"127.0.{(n // 250) % 250 + 1}.{n % 250 + 2}"
+
+
+def wait_port(host, port, timeout=5.0):
+    """Seconds until host:port accepts a connection; raises TimeoutError."""
+    t0 = time.monotonic()
+    while True:
+        try:
+            with socket.create_connection((host, port), timeout=0.2):
+                return time.monotonic() - t0
+        except OSError:
+            if time.monotonic() - t0 > timeout:
+                raise TimeoutError(f"{host}:{port} did not open within {timeout} s")
+            time.sleep(0.005)
+
+
+class Emulator:
+    """A running urtwin. Use as a context manager; args are extra command-line options."""
+
+    def __init__(self, *args, host=None, version="5.19"):
+        self.host = host or next_host()
+        self.version = version
+        self.args = [URTWIN, "--config", CONFIG, "--bind", self.host, "--controller-version",
+                     version, "--stats-every", "0", *args]
+        self.proc = None
+        self.start_time = None
+
+    def __enter__(self):
+        self.start_time = time.monotonic()
+        self.proc = subprocess.Popen(self.args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                     cwd=ROOT)
+        try:
+            for port in (30001, 30002, 30003):
+                wait_port(self.host, port)
+        except TimeoutError:
+            self.__exit__(None, None, None)
+            raise
+        self.ready_after = time.monotonic() - self.start_time
+        return self
+
+    def __exit__(self, *exc):
+        if self.proc and self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.out, self.err = self.proc.communicate(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.out, self.err = self.proc.communicate()
+        self.returncode = self.proc.returncode if self.proc else None
+
+    @property
+    def period(self):
+        return 0.002 if self.version.startswith("5") else 0.008
+
+    def alive(self):
+        return self.proc.poll() is None
+
+    def send_script(self, text, port=30002):
+        with socket.create_connection((self.host, port), timeout=2) as s:
+            s.sendall(text.encode() + (b"" if text.endswith("\n") else b"\n"))
+            time.sleep(0.05)
+
+
+def recv_exact(sock, n):
+    buf = bytearray()
+    while len(buf) < n:
+        chunk = sock.recv(n - len(buf))
+        if not chunk:
+            raise ConnectionError("peer closed")
+        buf += chunk
+    return bytes(buf)
+
+
+# ---- port 30003 (protocols.md §1.2) ----
+
+RT_FIELDS = {  # name: (offset, count)
+    "time": (4, 1), "q_target": (12, 6), "qd_target": (60, 6), "qdd_target": (108, 6),
+    "i_target": (156, 6), "m_target": (204, 6), "q_actual": (252, 6), "qd_actual": (300, 6),
+    "i_actual": (348, 6), "i_control": (396, 6), "tool_vector_actual": (444, 6),
+    "tcp_speed_actual": (492, 6), "tcp_force": (540, 6), "tool_vector_target": (588, 6),
+    "tcp_speed_target": (636, 6), "digital_inputs": (684, 1), "motor_temperatures": (692, 6),
+    "controller_timer": (740, 1), "robot_mode": (756, 1), "joint_modes": (764, 6),
+    "safety_mode": (812, 1), "speed_scaling": (940, 1), "v_main": (972, 1), "v_robot": (980, 1),
+    "i_robot": (988, 1), "v_actual": (996, 6), "digital_outputs": (1044, 1),
+    "program_state": (1052, 1), "elbow_position": (1060, 3), "elbow_velocity": (1084, 3),
+    "safety_status": (1108, 1),
+}
+
+
+def decode_rt(packet):
+    out = {"size": struct.unpack_from(">i", packet, 0)[0]}
+    for name, (off, n) in RT_FIELDS.items():
+        if off + 8 * n <= len(packet):
+            v = struct.unpack_from(f">{n}d", packet, off)
+            out[name] = v[0] if n == 1 else list(v)
+    return out
+
+
+class RtReader:
+    """A raw 30003 client."""
+
+    def __init__(self, host, port=30003, timeout=2.0):
+        self.sock = socket.create_connection((host, port), timeout=timeout)
+
+    def read(self):
+        size = struct.unpack(">i", recv_exact(self.sock, 4))[0]
+        return struct.pack(">i", size) + recv_exact(self.sock, size - 4)
+
+    def read_decoded(self):
+        return decode_rt(self.read())
+
+    def close(self):
+        self.sock.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+# ---- ports 30001/30002 (protocols.md §4) ----
+
+class PrimaryReader:
+    """A raw primary/secondary client: yields (type, body) messages."""
+
+    def __init__(self, host, port=30001, timeout=2.0):
+        self.sock = socket.create_connection((host, port), timeout=timeout)
+
+    def read(self):
+        size, kind = struct.unpack(">iB", recv_exact(self.sock, 5))
+        return kind, recv_exact(self.sock, size - 5)
+
+    def robot_messages(self, seconds):
+        """Every ROBOT_MESSAGE (type 20) decoded, for `seconds` of wall time."""
+        out = []
+        t_end = time.monotonic() + seconds
+        while time.monotonic() < t_end:
+            kind, body = self.read()
+            if kind == 20:
+                out.append(decode_robot_message(body))
+        return out
+
+    def close(self):
+        self.sock.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def decode_robot_message(body):
+    ts, source, mtype = struct.unpack_from(">QbB", body, 0)
+    rest = body[10:]
+    msg = {"timestamp": ts, "source": source, "type": mtype}
+    if mtype == 0:
+        msg["text"] = rest.decode(errors="replace")
+    elif mtype == 7:
+        code, arg, tlen = struct.unpack_from(">iiB", rest, 0)
+        msg.update(code=code, argument=arg, title=rest[9:9 + tlen].decode(),
+                   text=rest[9 + tlen:].decode(errors="replace"))
+    elif mtype == 10:
+        line, col = struct.unpack_from(">II", rest, 0)
+        msg.update(line=line, column=col, text=rest[8:].decode(errors="replace"))
+    elif mtype == 3:
+        n = rest[0]
+        msg.update(project=rest[1:1 + n].decode(), major=rest[1 + n], minor=rest[2 + n])
+    return msg

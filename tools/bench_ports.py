@@ -1,0 +1,104 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
+"""tools/bench_ports.py — the running emulator under load, for `make bench`.
+
+Starts build/tools/urtwin (20 kHz physics, tick pacing, e-Series 500 Hz), connects 8 clients to
+port 30003 with build/tools/urt_rtprobe for --seconds (default 60), and reports in one run:
+  - the inter-packet period the clients see (p50/p99/p99.9/max over all 8 clients),
+  - packets received and gaps in the controller timestamps,
+  - physics overruns and missed periods the emulator counted over its whole run,
+  - the emulator's resident memory (VmRSS) while serving them.
+Nothing here asserts a time: the machine is shared and noisy.
+
+    URT_BUILD=build .venv/bin/python tools/bench_ports.py --out build/bench_ports.json
+"""
+
+import argparse
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def vm_rss_kib(pid):
+    with open(f"/proc/{pid}/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    return None
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--build", default=os.environ.get("URT_BUILD", str(ROOT / "build")))
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--clients", type=int, default=8)
+    ap.add_argument("--host", default="127.0.0.1")
+    ap.add_argument("--port-offset", type=int, default=1000)
+    ap.add_argument("--out", default="build/bench_ports.json")
+    args = ap.parse_args(argv)
+
+    build = Path(args.build)
+    emu = subprocess.Popen(
+        [str(build / "tools" / "urtwin"), "--config", str(ROOT / "config" / "ur5.yaml"),
+         "--bind", args.host, "--port-offset", str(args.port_offset), "--pacing", "tick",
+         "--rate", "20000", "--stats-every", "0"],
+        stderr=subprocess.PIPE, text=True)
+    try:
+        port = 30003 + args.port_offset
+        t0 = time.monotonic()
+        probe = None
+        while time.monotonic() - t0 < 5:
+            probe = subprocess.Popen(
+                [str(build / "tools" / "urt_rtprobe"), "--host", args.host, "--port", str(port),
+                 "--clients", str(args.clients), "--seconds", str(args.seconds)],
+                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            time.sleep(0.3)
+            if probe.poll() is None:
+                break
+            probe = None
+        if probe is None:
+            print("bench_ports.py: urtwin did not open its ports", file=sys.stderr)
+            return 1
+        time.sleep(min(5.0, args.seconds / 2))
+        rss = vm_rss_kib(emu.pid)
+        out, err = probe.communicate(timeout=args.seconds + 30)
+        if probe.returncode != 0:
+            print(f"bench_ports.py: urt_rtprobe failed: {err}", file=sys.stderr)
+            return 1
+        seen = json.loads(out)
+    finally:
+        emu.send_signal(signal.SIGTERM)
+        _, emu_err = emu.communicate(timeout=10)
+    m = re.search(r"stopped after (\d+) ticks, (\d+) overruns, (\d+) missed periods", emu_err)
+    res = {
+        "rt_clients": seen,
+        "emulator": {
+            "ticks": int(m.group(1)) if m else None,
+            "overruns": int(m.group(2)) if m else None,
+            "missed_periods": int(m.group(3)) if m else None,
+            "vm_rss_kib": rss,
+        },
+        "settings": {"physics_hz": 20000, "controller_hz": 500, "pacing": "tick",
+                     "seconds": args.seconds, "loadavg_end": list(os.getloadavg())},
+    }
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.out).write_text(json.dumps(res, indent=2) + "\n")
+    iv = seen["interval_us"]
+    e = res["emulator"]
+    print(f"30003 with {seen['clients']} clients for {args.seconds:.0f} s: {seen['packets']} packets, "
+          f"{seen['timestamp_gaps']} timestamp gaps; inter-packet period p50 {iv['p50']:.0f} us, "
+          f"p99 {iv['p99']:.0f} us, p99.9 {iv['p99_9']:.0f} us, max {iv['max']:.0f} us")
+    print(f"urtwin: {e['ticks']} ticks, {e['overruns']} physics overruns, {e['missed_periods']} "
+          f"missed periods; resident {e['vm_rss_kib'] / 1024:.1f} MiB")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,267 @@
+// SPDX-License-Identifier: Apache-2.0
+// tools/urtwin.cpp — the emulator: loads a robot parameter file, starts the hard real-time loop
+// (core/loop.c) and the UR network interfaces (net/), and runs until SIGINT/SIGTERM.
+//
+//   urtwin [--config FILE] [--set KEY=VALUE]... [--bind ADDR] [--port-offset N]
+//          [--controller-version 5.19|3.15|…] [--rate 20000|10000] [--pacing tick|step|free|lockstep]
+//          [--seed N] [--q0 q1,…,q6] [--boot ready|power-off] [--lcm] [--lcm-url URL] …
+//
+// Exit status: 0 after a clean stop, 1 run-time failure (a port cannot be bound, …),
+// 2 usage or configuration error.
+
+#include <signal.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "urt/core.h"
+#include "urt/loop.h"
+#include "urt/net/emulator.h"
+#include "urt/net/lcm_bridge.h"
+#include "urt/net/version.h"
+
+namespace {
+
+volatile sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+struct Options {
+  std::string config = "config/ur5.yaml";
+  std::vector<std::string> sets;
+  std::string bind = "127.0.0.1";
+  int port_offset = 0;
+  std::string version = "5.19";
+  double rate = 20000.0;
+  std::string pacing = "tick";
+  long long seed = -1;          // < 0: the config's
+  std::string q0;
+  std::string boot = "ready";
+  bool lcm = false;
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string lcm_prefix = "URTWIN";
+  double drive_rate = 1000.0;
+  int rt_priority = 0;
+  bool lock_memory = false;
+  bool remote_control = true;
+  std::string programs_dir = "programs";
+  double stats_every = 10.0;    // seconds between loop statistics lines (0: never)
+};
+
+int parse_q0(const std::string& text, double q[URT_NJ]) {
+  std::vector<double> v;
+  size_t pos = 0;
+  while (pos <= text.size()) {
+    size_t comma = text.find(',', pos);
+    std::string item = text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos);
+    char* end = nullptr;
+    double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(x)) {
+      return -1;
+    }
+    v.push_back(x);
+    if (comma == std::string::npos) {
+      break;
+    }
+    pos = comma + 1;
+  }
+  if (v.size() != URT_NJ) {
+    return -1;
+  }
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = v[j];
+  }
+  return 0;
+}
+
+long resident_kib() {
+  FILE* f = std::fopen("/proc/self/statm", "r");
+  long pages = 0, rss = 0;
+  if (f) {
+    if (std::fscanf(f, "%ld %ld", &pages, &rss) != 2) {
+      rss = 0;
+    }
+    std::fclose(f);
+  }
+  return rss * (sysconf(_SC_PAGESIZE) / 1024);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app{"urtwin: a real-time emulator of a Universal Robots UR5 (physics + UR network ports)"};
+  app.add_option("-c,--config", o.config, "robot parameter file")->capture_default_str();
+  app.add_option("-s,--set", o.sets, "override a config value, KEY=VALUE (repeatable)");
+  app.add_option("--bind", o.bind, "IPv4 address every server binds")->capture_default_str();
+  app.add_option("--port-offset", o.port_offset, "added to every port (several emulators per host)")
+      ->check(CLI::Range(0, 30000))->capture_default_str();
+  app.add_option("--controller-version", o.version,
+                 "emulated controller: 5.x = e-Series at 500 Hz, 3.x = CB3 at 125 Hz")
+      ->capture_default_str();
+  app.add_option("--rate", o.rate, "physics rate [Hz]")->check(CLI::IsMember({10000.0, 20000.0}))
+      ->capture_default_str();
+  app.add_option("--pacing", o.pacing, "tick | step | free | lockstep")
+      ->check(CLI::IsMember({"tick", "step", "free", "lockstep"}))->capture_default_str();
+  app.add_option("--seed", o.seed, "sensor-noise RNG seed (default: the config's)");
+  app.add_option("--q0", o.q0, "initial joint positions [rad], six comma-separated values");
+  app.add_option("--boot", o.boot, "ready (RUNNING) or power-off")
+      ->check(CLI::IsMember({"ready", "power-off"}))->capture_default_str();
+  app.add_flag("--lcm", o.lcm, "publish status and drive messages on LCM, take commands");
+  app.add_option("--lcm-url", o.lcm_url, "LCM provider URL (ttl=0 keeps traffic on this host)")
+      ->capture_default_str();
+  app.add_option("--lcm-prefix", o.lcm_prefix, "channel prefix: PREFIX_STATUS, _DRIVE, _COMMAND")
+      ->capture_default_str();
+  app.add_option("--drive-rate", o.drive_rate, "LCM drive message rate [Hz]")
+      ->check(CLI::Range(0.0, 20000.0))->capture_default_str();
+  app.add_option("--rt-priority", o.rt_priority, "SCHED_FIFO priority of the physics thread (0: none)")
+      ->check(CLI::Range(0, 99))->capture_default_str();
+  app.add_flag("--lock-memory", o.lock_memory, "mlockall and prefault the physics thread's stack");
+  app.add_option("--stats-every", o.stats_every, "seconds between loop statistics lines (0: never)")
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  }
+
+  urt_version_t version;
+  if (urt_version_parse(o.version.c_str(), &version) != 0) {
+    std::fprintf(stderr, "urtwin: --controller-version %s: expected 3.x or 5.x\n", o.version.c_str());
+    return 2;
+  }
+  double q0[URT_NJ];
+  if (!o.q0.empty() && parse_q0(o.q0, q0) != 0) {
+    std::fprintf(stderr, "urtwin: --q0 %s: expected six finite comma-separated numbers\n", o.q0.c_str());
+    return 2;
+  }
+
+  // the rate and seed are config values: pass them as overrides so the loader validates them
+  std::vector<std::string> sets = o.sets;
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "simulation.dt=%.17g", 1.0 / o.rate);
+  sets.insert(sets.begin(), buf);
+  if (o.seed >= 0) {
+    std::snprintf(buf, sizeof buf, "simulation.seed=%lld", o.seed);
+    sets.insert(sets.begin(), buf);
+  }
+  std::vector<const char*> overrides;
+  for (const auto& s : sets) {
+    overrides.push_back(s.c_str());
+  }
+  overrides.push_back(nullptr);
+
+  urt_model_t* m = nullptr;
+  char err[512];
+  if (urt_model_load(o.config.c_str(), overrides.data(), &m, err, sizeof err) != 0) {
+    std::fprintf(stderr, "urtwin: %s\n", err);
+    return 2;
+  }
+
+  urt_loop_config_t lc{};
+  lc.period = urt_version_period(&version);
+  lc.pacing = o.pacing == "step"       ? URT_PACING_STEP
+              : o.pacing == "free"     ? URT_PACING_FREE
+              : o.pacing == "lockstep" ? URT_PACING_LOCKSTEP
+                                       : URT_PACING_TICK;
+  lc.powered = o.boot == "ready";
+  lc.rt_priority = o.rt_priority;
+  lc.lock_memory = o.lock_memory;
+  lc.drive_rate = o.lcm ? o.drive_rate : 0.0;
+  urt_loop_t* loop = nullptr;
+  int rc = urt_loop_create(m, &lc, o.q0.empty() ? nullptr : q0, &loop, err, sizeof err);
+  if (rc != 0) {
+    std::fprintf(stderr, "urtwin: %s\n", err);
+    urt_model_free(m);
+    return 2;
+  }
+
+  urt_emulator_config_t ec{};
+  ec.bind = o.bind.c_str();
+  ec.port_offset = o.port_offset;
+  ec.version = version;
+  urt_emulator_t* emu = nullptr;
+  if (urt_emulator_create(loop, &ec, &emu, err, sizeof err) != 0) {
+    std::fprintf(stderr, "urtwin: %s\n", err);
+    urt_loop_destroy(loop);
+    urt_model_free(m);
+    return 1;
+  }
+
+  urt_lcm_bridge_t* bridge = nullptr;
+  if (o.lcm) {
+    urt_lcm_config_t bc{};
+    urt_lcm_config_default(&bc);
+    bc.url = o.lcm_url.c_str();
+    std::string st = o.lcm_prefix + "_STATUS", dr = o.lcm_prefix + "_DRIVE",
+                cm = o.lcm_prefix + "_COMMAND";
+    bc.status_channel = st.c_str();
+    bc.drive_channel = dr.c_str();
+    bc.command_channel = cm.c_str();
+    bc.lockstep = lc.pacing == URT_PACING_LOCKSTEP;
+    if (urt_lcm_bridge_create(loop, &bc, &bridge, err, sizeof err) != 0) {
+      std::fprintf(stderr, "urtwin: lcm: %s\n", err);
+      urt_emulator_destroy(emu);
+      urt_loop_destroy(loop);
+      urt_model_free(m);
+      return 1;
+    }
+  }
+
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+
+  urt_loop_start(loop);
+  urt_emulator_start(emu);
+  if (bridge) {
+    urt_lcm_bridge_start(bridge);
+  }
+  std::fprintf(stderr,
+               "urtwin: %s, controller %d.%d.%d (%s, %.0f Hz), physics %.0f Hz, pacing %s, on %s "
+               "ports %d-%d (offset %d)%s\n",
+               m->name, version.major, version.minor, version.bugfix,
+               urt_version_is_eseries(&version) ? "e-Series" : "CB3", 1.0 / lc.period, 1.0 / m->dt,
+               o.pacing.c_str(), o.bind.c_str(), 30001 + o.port_offset, 30003 + o.port_offset,
+               o.port_offset, o.lcm ? ", LCM on" : "");
+
+  double since_stats = 0.0;
+  while (!g_stop) {
+    usleep(100000);
+    since_stats += 0.1;
+    if (o.stats_every > 0 && since_stats >= o.stats_every) {
+      since_stats = 0.0;
+      urt_loop_stats_t s;
+      urt_loop_get_stats(loop, &s);
+      std::fprintf(stderr,
+                   "urtwin: ticks %llu, overruns %llu, missed periods %llu, commands dropped %llu, "
+                   "physics per period last %.0f us max %.0f us, resident %ld KiB\n",
+                   (unsigned long long)s.ticks, (unsigned long long)s.overruns,
+                   (unsigned long long)s.missed_periods, (unsigned long long)s.cmd_dropped,
+                   s.exec_last * 1e6, s.exec_max * 1e6, resident_kib());
+    }
+  }
+
+  if (bridge) {
+    urt_lcm_bridge_stop(bridge);
+  }
+  urt_emulator_stop(emu);
+  urt_loop_stop(loop);
+  urt_loop_stats_t s;
+  urt_loop_get_stats(loop, &s);
+  std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",
+               (unsigned long long)s.ticks, (unsigned long long)s.overruns,
+               (unsigned long long)s.missed_periods);
+  urt_lcm_bridge_destroy(bridge);
+  urt_emulator_destroy(emu);
+  urt_loop_destroy(loop);
+  urt_model_free(m);
+  return 0;
+}
