@@ -18,9 +18,11 @@
 
 #define WAIT_MS 50        /* how often the threads look at the stop flag        */
 #define JOIN_TIMEOUT_S 2  /* bounded join                                       */
+#define REPEAT_MS 100     /* lockstep: repeat the newest status this often while idle */
 
 typedef struct counters {
-  _Atomic uint64_t status_sent, ticks_lost, drive_sent, drive_lost, publish_errors;
+  _Atomic uint64_t status_sent, status_repeated, ticks_lost, drive_sent, drive_lost,
+      publish_errors;
   _Atomic uint64_t cmd_received, cmd_accepted, cmd_rejected, cmd_dropped, last_tick;
 } counters_t;
 
@@ -78,7 +80,21 @@ typedef struct pub_state {
   double next_drive_time;
   uint8_t *buf;
   int cap;
+  urtwin_lcmt_urtwin_status last;  /* the newest status sent (lockstep repeats)   */
+  int have_last;
+  int64_t last_sent_utime;         /* wall clock of the last status sent [us]      */
 } pub_state_t;
+
+static void send_status(urt_lcm_bridge_t *b, pub_state_t *ps, urtwin_lcmt_urtwin_status *msg,
+                        _Atomic uint64_t *counter) {
+  int len = urtwin_lcmt_urtwin_status_encode(ps->buf, 0, ps->cap, msg);
+  if (len < 0 || lcm_publish(b->pub, b->status_channel, ps->buf, (unsigned)len) != 0) {
+    bump(&b->n.publish_errors, 1);
+  } else {
+    bump(counter, 1);
+  }
+  ps->last_sent_utime = msg->publish_utime;
+}
 
 // publish every tick in [next_tick, newest]; skip (and count) ticks already overwritten
 static void publish_ticks(urt_lcm_bridge_t *b, pub_state_t *ps, uint64_t newest) {
@@ -104,11 +120,10 @@ static void publish_ticks(urt_lcm_bridge_t *b, pub_state_t *ps, uint64_t newest)
 
     // fill, encode into the thread's buffer, send
     urt_lcm_status_fill(&snap, wall_utime(), (int64_t)atomic_load(&b->n.ticks_lost), &msg);
-    int len = urtwin_lcmt_urtwin_status_encode(ps->buf, 0, ps->cap, &msg);
-    if (len < 0 || lcm_publish(b->pub, b->status_channel, ps->buf, (unsigned)len) != 0) {
-      bump(&b->n.publish_errors, 1);
-    } else {
-      bump(&b->n.status_sent, 1);
+    send_status(b, ps, &msg, &b->n.status_sent);
+    if (b->lockstep) {
+      ps->last = msg;
+      ps->have_last = 1;
     }
     atomic_store_explicit(&b->n.last_tick, snap.tick, memory_order_relaxed);
     ps->next_tick++;
@@ -186,6 +201,14 @@ static void *pub_main(void *arg) {
     newest = b->src.wait(b->src.ctx, ps.next_tick - 1, WAIT_MS);
     if (b->status_channel[0] != '\0') {
       publish_ticks(b, &ps, newest);
+
+      // lockstep waits for a command, and a client waits for a status: repeat the newest
+      // (same tick) while idle, so a client that subscribed after it went out can start
+      int64_t now = wall_utime();
+      if (b->lockstep && ps.have_last && now - ps.last_sent_utime >= REPEAT_MS * 1000) {
+        ps.last.publish_utime = now;
+        send_status(b, &ps, &ps.last, &b->n.status_repeated);
+      }
     } else {
       ps.next_tick = newest + 1;
     }
@@ -391,6 +414,7 @@ void urt_lcm_bridge_destroy(urt_lcm_bridge_t *b) {
 void urt_lcm_bridge_get_stats(const urt_lcm_bridge_t *b, urt_lcm_stats_t *out) {
   counters_t *n = (counters_t *)&b->n;
   out->status_sent = atomic_load(&n->status_sent);
+  out->status_repeated = atomic_load(&n->status_repeated);
   out->ticks_lost = atomic_load(&n->ticks_lost);
   out->drive_sent = atomic_load(&n->drive_sent);
   out->drive_lost = atomic_load(&n->drive_lost);

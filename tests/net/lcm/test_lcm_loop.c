@@ -101,7 +101,7 @@ typedef struct listener {
   atomic_int stop;
   pthread_mutex_t mu;
   // status: how often each tick arrived (ticks beyond MAX_TICKS are not recorded)
-  long count, gaps;
+  long count, gaps, repeats;
   int64_t last_tick;
   urtwin_lcmt_urtwin_status last;
   uint8_t tick_seen[MAX_TICKS];
@@ -132,6 +132,11 @@ static void on_status(const lcm_recv_buf_t *rbuf, const char *ch,
                       const urtwin_lcmt_urtwin_status *m, void *user) {
   listener_t *l = user;
   pthread_mutex_lock(&l->mu);
+  if (l->count > 0 && m->tick == l->last_tick) {
+    l->repeats++;  // lockstep repeats the newest status while idle
+    pthread_mutex_unlock(&l->mu);
+    return;
+  }
   if (l->count > 0 && m->tick != l->last_tick + 1) {
     l->gaps++;
   }
@@ -352,8 +357,11 @@ static void test_lcm_loop__lockstep_one_tick_per_command(void **state) {
   assert_int_equal(ticks, 101);
   assert_int_equal(st.cmd_accepted, 100);
   assert_int_equal(st.cmd_rejected, 1);
+  assert_int_equal(st.status_sent, 101);
+  assert_true(st.status_repeated >= 1);  // idle for 0.2 s after the last command
   assert_int_equal(l.count, 101);
   assert_int_equal(l.gaps, 0);
+  assert_true(l.repeats >= 1);
 }
 
 

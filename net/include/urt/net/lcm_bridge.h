@@ -45,7 +45,9 @@ typedef struct urt_lcm_config {
                                 * 0: every sample the loop makes (its own drive_rate)           */
   int lockstep;                /* 1 (loop in URT_PACING_LOCKSTEP): grant one tick at start, so a
                                 * first status goes out, and one per accepted command (Drake's
-                                * LcmDrivenLoop); 0: never grant                                */
+                                * LcmDrivenLoop); while no new tick comes, repeat the newest
+                                * status every 100 ms (same tick: receivers drop repeats) so a
+                                * client that subscribes late can start; 0: never grant      */
 } urt_lcm_config_t;
 
 /* All defaults (the NULL / 0 values above). Context: any. */
@@ -53,7 +55,8 @@ void urt_lcm_config_default(urt_lcm_config_t *cfg);
 
 /* Counters, readable from any thread while the bridge runs. */
 typedef struct urt_lcm_stats {
-  uint64_t status_sent;     /* status messages published                                     */
+  uint64_t status_sent;     /* status messages published, one per tick                       */
+  uint64_t status_repeated; /* lockstep: the newest status sent again while idle             */
   uint64_t ticks_lost;      /* controller ticks overwritten before the publisher read them   */
   uint64_t drive_sent;      /* drive messages published                                      */
   uint64_t drive_lost;      /* drive samples overwritten before the publisher read them      */
