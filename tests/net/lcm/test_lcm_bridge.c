@@ -189,6 +189,7 @@ static void sleep_s(double s) {
 
 typedef struct listener {
   lcm_t *lcm;
+  urtwin_lcmt_urtwin_status_subscription_t *sub;
   pthread_t thread;
   atomic_int stop;
   long count, gaps;
@@ -221,16 +222,16 @@ static void listener_start(listener_t *l, const names_t *n) {
   memset(l, 0, sizeof *l);
   l->lcm = lcm_create(n->url);
   assert_non_null(l->lcm);
-  urtwin_lcmt_urtwin_status_subscription_t *s =
-      urtwin_lcmt_urtwin_status_subscribe(l->lcm, n->status, on_status, l);
-  assert_non_null(s);
-  urtwin_lcmt_urtwin_status_subscription_set_queue_capacity(s, 1000);
+  l->sub = urtwin_lcmt_urtwin_status_subscribe(l->lcm, n->status, on_status, l);
+  assert_non_null(l->sub);
+  urtwin_lcmt_urtwin_status_subscription_set_queue_capacity(l->sub, 1000);
   assert_int_equal(pthread_create(&l->thread, NULL, listen_main, l), 0);
 }
 
 static void listener_stop(listener_t *l) {
   atomic_store(&l->stop, 1);
   pthread_join(l->thread, NULL);
+  urtwin_lcmt_urtwin_status_unsubscribe(l->lcm, l->sub);
   lcm_destroy(l->lcm);
 }
 

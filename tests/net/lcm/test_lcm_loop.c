@@ -97,6 +97,8 @@ static void rig_stop(rig_t *r) {
 
 typedef struct listener {
   lcm_t *lcm;
+  urtwin_lcmt_urtwin_status_subscription_t *sub;
+  urtwin_lcmt_urtwin_drive_subscription_t *dsub;
   pthread_t thread;
   atomic_int stop;
   pthread_mutex_t mu;
@@ -174,20 +176,20 @@ static void listener_start(listener_t *l, const names_t *n) {
   pthread_mutex_init(&l->mu, NULL);
   l->lcm = lcm_create(n->url);
   assert_non_null(l->lcm);
-  urtwin_lcmt_urtwin_status_subscription_t *s =
-      urtwin_lcmt_urtwin_status_subscribe(l->lcm, n->status, on_status, l);
-  urtwin_lcmt_urtwin_drive_subscription_t *d =
-      urtwin_lcmt_urtwin_drive_subscribe(l->lcm, n->drive, on_drive, l);
-  assert_non_null(s);
-  assert_non_null(d);
-  urtwin_lcmt_urtwin_status_subscription_set_queue_capacity(s, 2000);
-  urtwin_lcmt_urtwin_drive_subscription_set_queue_capacity(d, 4000);
+  l->sub = urtwin_lcmt_urtwin_status_subscribe(l->lcm, n->status, on_status, l);
+  l->dsub = urtwin_lcmt_urtwin_drive_subscribe(l->lcm, n->drive, on_drive, l);
+  assert_non_null(l->sub);
+  assert_non_null(l->dsub);
+  urtwin_lcmt_urtwin_status_subscription_set_queue_capacity(l->sub, 2000);
+  urtwin_lcmt_urtwin_drive_subscription_set_queue_capacity(l->dsub, 4000);
   assert_int_equal(pthread_create(&l->thread, NULL, listen_main, l), 0);
 }
 
 static void listener_stop(listener_t *l) {
   atomic_store(&l->stop, 1);
   pthread_join(l->thread, NULL);
+  urtwin_lcmt_urtwin_status_unsubscribe(l->lcm, l->sub);
+  urtwin_lcmt_urtwin_drive_unsubscribe(l->lcm, l->dsub);
   lcm_destroy(l->lcm);
 }
 

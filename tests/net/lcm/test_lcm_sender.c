@@ -168,7 +168,8 @@ static void test_lcm_status__survives_encode_publish_decode_over_memq(void **sta
   assert_non_null(lcm);
   urtwin_lcmt_urtwin_status got;
   memset(&got, 0, sizeof got);
-  urtwin_lcmt_urtwin_status_subscribe(lcm, "S", on_status, &got);
+  urtwin_lcmt_urtwin_status_subscription_t *sub =
+      urtwin_lcmt_urtwin_status_subscribe(lcm, "S", on_status, &got);
 
   urt_snapshot_t s = make_snapshot();
   urtwin_lcmt_urtwin_status sent;
@@ -176,6 +177,7 @@ static void test_lcm_status__survives_encode_publish_decode_over_memq(void **sta
   assert_int_equal(urtwin_lcmt_urtwin_status_publish(lcm, "S", &sent), 0);
   assert_true(lcm_handle_timeout(lcm, 100) > 0);
   assert_memory_equal(&got, &sent, sizeof sent);  // fixed-size arrays only: no pointers
+  urtwin_lcmt_urtwin_status_unsubscribe(lcm, sub);
   lcm_destroy(lcm);
 }
 
