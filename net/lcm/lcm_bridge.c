@@ -327,6 +327,15 @@ int urt_lcm_bridge_create_source(const urt_lcm_source_t *src, const urt_lcm_conf
     return URT_ENOMEM;
   }
 
+  // LCM refuses longer channel names at publish time: say so now
+  if (strlen(b->status_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
+      strlen(b->drive_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
+      strlen(b->command_channel) > LCM_MAX_CHANNEL_NAME_LENGTH) {
+    set_err(err, err_sz, "lcm: channel names are limited to %s characters", "63");
+    free_bridge(b);
+    return URT_EINVAL;
+  }
+
   // open: one instance publishes, the other (if any) subscribes, so the publisher never
   // carries a receive socket
   b->pub = lcm_create(b->url);

@@ -30,7 +30,7 @@ _runs = itertools.count()
 def lcm_endpoint():
     """A udpm URL and channel prefix of this process and call."""
     k = next(_runs)
-    port = 20000 + (os.getpid() * 13 + 500 + k) % 40000
+    port = 10000 + (os.getpid() * 13 + 500 + k) % 20000  # below the ephemeral range
     return f"udpm://239.255.76.67:{port}?ttl=0", f"URTWIN_PY{os.getpid()}_{k}"
 
 

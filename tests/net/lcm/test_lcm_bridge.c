@@ -145,7 +145,7 @@ typedef struct names {
 static names_t unique_names(int k) {
   names_t n;
   int pid = (int)getpid();
-  snprintf(n.url, sizeof n.url, "udpm://239.255.76.67:%d?ttl=0", 20000 + (pid * 7 + k) % 40000);
+  snprintf(n.url, sizeof n.url, "udpm://239.255.76.67:%d?ttl=0", 10000 + (pid * 7 + k) % 20000);
   snprintf(n.status, sizeof n.status, "URTWIN_STATUS_T%d_%d", pid, k);
   snprintf(n.drive, sizeof n.drive, "URTWIN_DRIVE_T%d_%d", pid, k);
   snprintf(n.command, sizeof n.command, "URTWIN_COMMAND_T%d_%d", pid, k);
@@ -469,6 +469,12 @@ static void test_lcm_bridge_create__refuses_bad_config(void **state) {
   assert_int_equal(urt_lcm_bridge_create_source(&src, &cfg, &b, err, sizeof err), URT_EINVAL);
   cfg.drive_rate = NAN;
   assert_int_equal(urt_lcm_bridge_create_source(&src, &cfg, &b, err, sizeof err), URT_EINVAL);
+
+  urt_lcm_config_default(&cfg);
+  cfg.status_channel = "URTWIN_STATUS_WITH_A_NAME_FAR_TOO_LONG_FOR_LCM_WHICH_STOPS_AT_63_CHARS";
+  assert_int_equal(urt_lcm_bridge_create_source(&src, &cfg, &b, err, sizeof err), URT_EINVAL);
+  assert_null(b);
+  assert_non_null(strstr(err, "63"));
 
   urt_lcm_config_default(&cfg);
   src.submit = NULL;

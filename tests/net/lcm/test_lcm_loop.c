@@ -43,7 +43,8 @@ typedef struct names {
 static names_t unique_names(int k) {
   names_t n;
   int pid = (int)getpid();
-  snprintf(n.url, sizeof n.url, "udpm://239.255.76.67:%d?ttl=0", 20000 + (pid * 7 + 100 + k) % 40000);
+  snprintf(n.url, sizeof n.url, "udpm://239.255.76.67:%d?ttl=0",
+           10000 + (pid * 7 + 100 + k) % 20000);
   snprintf(n.status, sizeof n.status, "URTWIN_STATUS_L%d_%d", pid, k);
   snprintf(n.drive, sizeof n.drive, "URTWIN_DRIVE_L%d_%d", pid, k);
   snprintf(n.command, sizeof n.command, "URTWIN_COMMAND_L%d_%d", pid, k);

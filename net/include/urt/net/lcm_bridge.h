@@ -86,7 +86,8 @@ typedef struct urt_lcm_bridge urt_lcm_bridge_t;
 
 /* Create a bridge on a loop: claims a command ring (urt_loop_add_producer "lcm") and opens the
  * LCM URL (publisher and subscriber instances). The loop must outlive the bridge.
- * Context: non-RT. Returns 0, URT_EINVAL (bad config), URT_ENOSPC (no free command ring),
+ * Context: non-RT. Returns 0, URT_EINVAL (drive_rate < 0 or NaN, lockstep not 0/1, a channel
+ * name longer than 63 characters), URT_ENOSPC (no free command ring),
  * URT_EIO (lcm_create failed: bad URL, or no multicast route — see the file comment) or
  * URT_ENOMEM; err receives a message. Nullable: cfg (defaults), err. */
 int urt_lcm_bridge_create(urt_loop_t *loop, const urt_lcm_config_t *cfg, urt_lcm_bridge_t **out,
