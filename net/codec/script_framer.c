@@ -132,7 +132,9 @@ static void emit(urt_script_framer_t *f, urt_script_unit_t *u) {
   if (u->kind == URT_SCRIPT_UNIT_ERROR) {
     f->errors++;
   }
-  f->on_unit(f->user, u);
+  if (f->on_unit) {
+    f->on_unit(f->user, u);
+  }
 }
 
 /* Emit an ERROR with an excerpt of what was collected, then skip the rest of the unit. */
@@ -143,8 +145,11 @@ static void fail_unit(urt_script_framer_t *f, urt_script_error_t err, int *count
     memcpy(excerpt, f->buf, n);
   }
   excerpt[n] = '\0';
-  urt_script_unit_t u = {URT_SCRIPT_UNIT_ERROR, URT_SCRIPT_CMD_UNKNOWN, err, excerpt, n,
-                         NULL, 0, f->unit_line};
+  static const char *const kText[] = {"", "unit larger than the size limit",
+                                      "block still open at the end of the stream",
+                                      "out of memory"};
+  urt_script_unit_t u = {URT_SCRIPT_UNIT_ERROR, URT_SCRIPT_CMD_UNKNOWN, err, kText[err],
+                         excerpt, n, NULL, 0, f->unit_line};
   emit(f, &u);
   (*count)++;
   f->len = 0;
@@ -154,8 +159,8 @@ static void fail_unit(urt_script_framer_t *f, urt_script_error_t err, int *count
 /* Emit the collected bytes as one unit of the given kind. */
 static void emit_text(urt_script_framer_t *f, urt_script_unit_kind_t kind, int *count) {
   f->buf[f->len] = '\0';
-  urt_script_unit_t u = {kind, URT_SCRIPT_CMD_UNKNOWN, URT_SCRIPT_ERR_NONE, f->buf, f->len,
-                         NULL, 0, f->unit_line};
+  urt_script_unit_t u = {kind, URT_SCRIPT_CMD_UNKNOWN, URT_SCRIPT_ERR_NONE, NULL, f->buf,
+                         f->len, NULL, 0, f->unit_line};
 
   // a program's name: the word after def/sec
   if (kind == URT_SCRIPT_UNIT_PROGRAM || kind == URT_SCRIPT_UNIT_SECONDARY) {
@@ -327,20 +332,15 @@ static void end_line(urt_script_framer_t *f, int *count) {
 
 //---- public API ----
 
-int urt_script_framer_init(urt_script_framer_t *f, size_t max_unit, urt_script_unit_fn on_unit,
-                           void *user) {
-  if (!f || !on_unit) {
-    return URT_EINVAL;
-  }
+void urt_script_framer_init_max(urt_script_framer_t *f, size_t max_unit) {
   memset(f, 0, sizeof *f);
   f->max_unit = max_unit ? max_unit : URT_SCRIPT_MAX_UNIT_DEFAULT;
-  f->on_unit = on_unit;
-  f->user = user;
   clear_unit(f);
-  return 0;
 }
 
-void urt_script_framer_fini(urt_script_framer_t *f) {
+void urt_script_framer_init(urt_script_framer_t *f) { urt_script_framer_init_max(f, 0); }
+
+void urt_script_framer_free(urt_script_framer_t *f) {
   free(f->buf);
   f->buf = NULL;
   f->cap = 0;
@@ -349,9 +349,12 @@ void urt_script_framer_fini(urt_script_framer_t *f) {
 
 void urt_script_framer_reset(urt_script_framer_t *f) { clear_unit(f); }
 
-int urt_script_framer_feed(urt_script_framer_t *f, const void *data, size_t n) {
+int urt_script_framer_feed(urt_script_framer_t *f, const void *data, size_t n,
+                           urt_script_unit_fn on_unit, void *user) {
   const unsigned char *p = data;
   int count = 0;
+  f->on_unit = on_unit;
+  f->user = user;
   for (size_t i = 0; i < n; i++) {
     unsigned char c = p[i];
 
@@ -395,8 +398,10 @@ int urt_script_framer_feed(urt_script_framer_t *f, const void *data, size_t n) {
   return count;
 }
 
-int urt_script_framer_flush(urt_script_framer_t *f) {
+int urt_script_framer_finish(urt_script_framer_t *f, urt_script_unit_fn on_unit, void *user) {
   int count = 0;
+  f->on_unit = on_unit;
+  f->user = user;
 
   // a last line without its newline
   if (f->mode != MODE_SKIP && f->len > 0 && f->buf[f->len - 1] != '\n') {

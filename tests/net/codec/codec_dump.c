@@ -26,20 +26,20 @@ static int write_file(const char *path, const uint8_t *b, size_t n) {
 }
 
 static void print_unit(void *user, const urt_script_unit_t *u) {
-  printf("%d %d %d %llu %zu %.*s\n", (int)u->kind, (int)u->command, (int)u->error,
+  printf("%d %d %d %llu %zu %.*s\n", (int)u->kind, (int)u->command, (int)u->error_code,
          (unsigned long long)u->line, u->len, (int)u->name_len, u->name ? u->name : "");
 }
 
 static int frame_stdin(size_t max_unit) {
   urt_script_framer_t f;
-  urt_script_framer_init(&f, max_unit, print_unit, NULL);
+  urt_script_framer_init_max(&f, max_unit);
   char buf[4096];
   size_t n;
   while ((n = fread(buf, 1, sizeof buf, stdin)) > 0) {
-    urt_script_framer_feed(&f, buf, n);
+    urt_script_framer_feed(&f, buf, n, print_unit, NULL);
   }
-  urt_script_framer_flush(&f);
-  urt_script_framer_fini(&f);
+  urt_script_framer_finish(&f, print_unit, NULL);
+  urt_script_framer_free(&f);
   return 0;
 }
 

@@ -29,7 +29,8 @@ static void on_unit(void *user, const urt_script_unit_t *u) {
   int i = r->n++;
   r->kind[i] = u->kind;
   r->command[i] = u->command;
-  r->error[i] = u->error;
+  r->error[i] = u->error_code;
+  assert_true((u->kind == URT_SCRIPT_UNIT_ERROR) == (u->error != NULL));
   r->text[i] = malloc(u->len + 1);
   memcpy(r->text[i], u->text, u->len + 1);
   r->len[i] = u->len;
@@ -52,18 +53,18 @@ static void rec_free(rec_t *r) {
 static void frame(rec_t *r, const char *text, size_t n, size_t chunk, size_t max_unit) {
   urt_script_framer_t f;
   memset(r, 0, sizeof *r);
-  assert_int_equal(urt_script_framer_init(&f, max_unit, on_unit, r), 0);
+  urt_script_framer_init_max(&f, max_unit);
   if (chunk == 0) {
     chunk = n ? n : 1;
   }
   int total = 0;
   for (size_t off = 0; off < n; off += chunk) {
     size_t k = n - off < chunk ? n - off : chunk;
-    total += urt_script_framer_feed(&f, text + off, k);
+    total += urt_script_framer_feed(&f, text + off, k, on_unit, r);
   }
-  total += urt_script_framer_flush(&f);
+  total += urt_script_framer_finish(&f, on_unit, r);
   assert_int_equal(total, r->n);
-  urt_script_framer_fini(&f);
+  urt_script_framer_free(&f);
 }
 
 static void assert_same_units(const rec_t *a, const rec_t *b) {
@@ -175,11 +176,11 @@ static void test_script_framer__every_chunking_gives_the_same_units(void **state
   for (size_t cut = 0; cut <= sizeof kMixed - 1; cut++) {
     urt_script_framer_t f;
     memset(&part, 0, sizeof part);
-    urt_script_framer_init(&f, 0, on_unit, &part);
-    urt_script_framer_feed(&f, kMixed, cut);
-    urt_script_framer_feed(&f, kMixed + cut, sizeof kMixed - 1 - cut);
-    urt_script_framer_flush(&f);
-    urt_script_framer_fini(&f);
+    urt_script_framer_init(&f);
+    urt_script_framer_feed(&f, kMixed, cut, on_unit, &part);
+    urt_script_framer_feed(&f, kMixed + cut, sizeof kMixed - 1 - cut, on_unit, &part);
+    urt_script_framer_finish(&f, on_unit, &part);
+    urt_script_framer_free(&f);
     assert_same_units(&whole, &part);
     rec_free(&part);
   }
@@ -209,20 +210,20 @@ static void test_script_framer__program_waits_for_its_end(void **state) {
   urt_script_framer_t f;
   rec_t r;
   memset(&r, 0, sizeof r);
-  urt_script_framer_init(&f, 0, on_unit, &r);
-  assert_int_equal(urt_script_framer_feed(&f, "def p():\n  if True:\n", 20), 0);
-  assert_int_equal(urt_script_framer_feed(&f, "  end\n", 6), 0);
-  assert_int_equal(urt_script_framer_feed(&f, "end", 3), 0);  /* needs its newline */
-  assert_int_equal(urt_script_framer_feed(&f, "\n", 1), 1);
+  urt_script_framer_init(&f);
+  assert_int_equal(urt_script_framer_feed(&f, "def p():\n  if True:\n", 20, on_unit, &r), 0);
+  assert_int_equal(urt_script_framer_feed(&f, "  end\n", 6, on_unit, &r), 0);
+  assert_int_equal(urt_script_framer_feed(&f, "end", 3, on_unit, &r), 0);  /* needs "\n" */
+  assert_int_equal(urt_script_framer_feed(&f, "\n", 1, on_unit, &r), 1);
   assert_int_equal(r.kind[0], URT_SCRIPT_UNIT_PROGRAM);
 
   // an open block at the end of the stream is an error
-  assert_int_equal(urt_script_framer_feed(&f, "def q():\n  x = 1\n", 17), 0);
-  assert_int_equal(urt_script_framer_flush(&f), 1);
+  assert_int_equal(urt_script_framer_feed(&f, "def q():\n  x = 1\n", 17, on_unit, &r), 0);
+  assert_int_equal(urt_script_framer_finish(&f, on_unit, &r), 1);
   assert_int_equal(r.kind[1], URT_SCRIPT_UNIT_ERROR);
   assert_int_equal(r.error[1], URT_SCRIPT_ERR_INCOMPLETE);
   assert_string_equal(r.text[1], "def q():\n  x = 1");
-  urt_script_framer_fini(&f);
+  urt_script_framer_free(&f);
   rec_free(&r);
 }
 
@@ -289,9 +290,12 @@ static void test_script_framer__garbage_and_nul_bytes_do_not_crash(void **state)
   rec_free(&r);
 }
 
-static void test_script_framer__init_rejects_missing_callback(void **state) {
+static void test_script_framer__commands_and_a_missing_callback(void **state) {
   urt_script_framer_t f;
-  assert_int_equal(urt_script_framer_init(&f, 0, NULL, NULL), URT_EINVAL);
+  urt_script_framer_init(&f);
+  assert_int_equal(f.max_unit, URT_SCRIPT_MAX_UNIT_DEFAULT);
+  assert_int_equal(urt_script_framer_feed(&f, "power on\nx = 1\n", 15, NULL, NULL), 2);
+  urt_script_framer_free(&f);
   assert_int_equal(urt_script_command_of("  power   on ", 13), URT_SCRIPT_CMD_POWER_ON);
   assert_int_equal(urt_script_command_of("power on()", 10), -1);
   assert_int_equal(urt_script_command_of("halt", 4), -1);
@@ -352,7 +356,7 @@ int main(void) {
       cmocka_unit_test(test_script_framer__program_waits_for_its_end),
       cmocka_unit_test(test_script_framer__oversize_unit_is_an_error_then_framing_resumes),
       cmocka_unit_test(test_script_framer__garbage_and_nul_bytes_do_not_crash),
-      cmocka_unit_test(test_script_framer__init_rejects_missing_callback),
+      cmocka_unit_test(test_script_framer__commands_and_a_missing_callback),
       cmocka_unit_test(test_script_framer__large_nested_program_is_one_unit),
   };
   return cmocka_run_group_tests_name("net/codec/script_framer", tests, NULL, NULL);

@@ -64,7 +64,8 @@ typedef enum urt_script_error {
 typedef struct urt_script_unit {
   urt_script_unit_kind_t kind;
   urt_script_cmd_t command;     /* COMMAND only                                         */
-  urt_script_error_t error;     /* ERROR only                                           */
+  urt_script_error_t error_code;/* ERROR only, else URT_SCRIPT_ERR_NONE                 */
+  const char *error;            /* ERROR only: what went wrong (static text); else NULL */
   const char *text;             /* the unit's lines joined by '\n', no final newline,
                                    NUL-terminated; ERROR: the first ≤ 64 bytes kept.
                                    Valid only during the callback.                      */
@@ -79,7 +80,9 @@ typedef void (*urt_script_unit_fn)(void *user, const urt_script_unit_t *unit);
 
 typedef struct urt_script_framer {
   /* configuration */
-  size_t max_unit;
+  size_t max_unit;         /* largest unit [bytes], set by init / init_max */
+
+  /* the callback of the feed or finish call in progress */
   urt_script_unit_fn on_unit;
   void *user;
 
@@ -107,26 +110,30 @@ typedef struct urt_script_framer {
   uint64_t units, errors, dropped_bytes;
 } urt_script_framer_t;
 
-/* Set up a framer. max_unit 0 means URT_SCRIPT_MAX_UNIT_DEFAULT. No allocation until bytes
- * arrive. Returns 0 or URT_EINVAL (on_unit NULL). Nullable: user. Context: any. */
-int urt_script_framer_init(urt_script_framer_t *f, size_t max_unit, urt_script_unit_fn on_unit,
-                           void *user);
+/* Set up a framer with the default unit limit (URT_SCRIPT_MAX_UNIT_DEFAULT). No allocation
+ * until bytes arrive. Context: any. */
+void urt_script_framer_init(urt_script_framer_t *f);
+
+/* The same with a unit limit of max_unit bytes (0: the default). */
+void urt_script_framer_init_max(urt_script_framer_t *f, size_t max_unit);
 
 /* Free the buffer. The framer may be initialised again afterwards. */
-void urt_script_framer_fini(urt_script_framer_t *f);
+void urt_script_framer_free(urt_script_framer_t *f);
 
 /* Forget any partial unit (e.g. the client reconnected); statistics are kept. */
 void urt_script_framer_reset(urt_script_framer_t *f);
 
-/* Consume n bytes (any content, any chunking) and emit every unit they complete.
- * Returns the number of units emitted (ERROR units included). Nullable: data when n is 0.
- * Context: non-RT (may grow the buffer). */
-int urt_script_framer_feed(urt_script_framer_t *f, const void *data, size_t n);
+/* Consume n bytes (any content, any chunking) and call on_unit for every unit they complete,
+ * in order. on_unit must not call back into this framer. Returns the number of units emitted
+ * (ERROR units included). Nullable: data when n is 0, on_unit (units are then only counted),
+ * user. Context: non-RT (may grow the buffer). */
+int urt_script_framer_feed(urt_script_framer_t *f, const void *data, size_t n,
+                           urt_script_unit_fn on_unit, void *user);
 
-/* End of stream: a final line without newline is framed as if the newline had arrived; a
- * block still open becomes an ERROR (URT_SCRIPT_ERR_INCOMPLETE). The framer is then empty.
- * Returns the number of units emitted. */
-int urt_script_framer_flush(urt_script_framer_t *f);
+/* End of stream: a final line without newline is framed as if the newline had arrived (a
+ * statement sent without its newline still runs); a block still open becomes an ERROR
+ * (URT_SCRIPT_ERR_INCOMPLETE). The framer is then empty. Returns the number of units. */
+int urt_script_framer_finish(urt_script_framer_t *f, urt_script_unit_fn on_unit, void *user);
 
 /* "power on" → URT_SCRIPT_CMD_POWER_ON …; -1 if line is not a controller command (blanks
  * around and between words are ignored). */
