@@ -150,7 +150,11 @@ static void put_robot_mode(urt_wbuf_t *w, layout_t l, const urt_snapshot_t *s) {
   int connected = s->robot_mode > URT_ROBOT_MODE_DISCONNECTED;
   int power_on = s->robot_mode >= URT_ROBOT_MODE_POWER_ON && s->robot_mode <= URT_ROBOT_MODE_RUNNING;
   int estop = s->safety_mode == 6 || s->safety_mode == 7;
-  double t_us = s->time > 0 ? s->time * 1e6 + 0.5 : 0.0;
+  // controller time in µs; NaN, negative or absurd times become 0 (the cast would be UB)
+  double t_us = s->time * 1e6 + 0.5;
+  if (!(t_us >= 0.0 && t_us < 1.8e19)) {
+    t_us = 0.0;
+  }
 
   urt_be_put_u64(w, (uint64_t)t_us);
   urt_be_put_bool(w, connected);

@@ -67,7 +67,7 @@ int urt_script_command_of(const char *line, size_t len) {
   // a known command
   for (size_t k = 0; k < sizeof kCommands / sizeof kCommands[0]; k++) {
     if (strcmp(norm, kCommands[k].text) == 0) {
-      return kCommands[k].cmd;
+      return (int)kCommands[k].cmd;
     }
   }
 
