@@ -67,6 +67,8 @@ typedef struct urt_dashboard_robot {
 void urt_dashboard_robot_from_snapshot(const struct urt_snapshot *s, urt_dashboard_robot_t *r);
 
 //---- dashboard-owned state (one per emulator, shared by all connections) ----
+/* Not locked: call urt_dashboard_handle() for every connection from one thread (the I/O
+ * thread), as the real controller's single dashboard server does. */
 
 enum {
   URT_DASHBOARD_OPMODE_NONE = 0,
