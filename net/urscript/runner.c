@@ -7,7 +7,9 @@
  * wait (every blocking builtin waits through host->wait_tick) return US_ERR_CANCEL. Secondary
  * programs queued meanwhile run at those waits, so they never wait for the main program to end.
  */
+#ifndef _GNU_SOURCE
 #define _GNU_SOURCE
+#endif
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>

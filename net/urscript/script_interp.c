@@ -350,6 +350,10 @@ static const char *fault_text(uint32_t f) {
 
 static int motion_check(vm *V, const us_node *at, const char *what) {
   const urt_snapshot_t *s = &V->snap;
+  if (s->robot_mode != URT_ROBOT_MODE_RUNNING && !s->ctrl_fault) {
+    return fail(V, at, "%s: motion refused (robot is not running; robot mode %d)", what,
+                (int)s->robot_mode);
+  }
   if (s->ctrl_fault || !safety_ok(s)) {
     return fail(V, at, "%s: motion refused or aborted (%s; safety mode %d)", what,
                 fault_text(s->ctrl_fault), (int)s->safety_mode);
@@ -374,8 +378,8 @@ static int motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *cm
     if (V->snap.motion_done_id >= cmd->id) {
       break;
     }
-    if (!safety_ok(&V->snap)) {
-      break;
+    if (!safety_ok(&V->snap) || V->snap.robot_mode != URT_ROBOT_MODE_RUNNING) {
+      break;  // refused or aborted: reported below
     }
     if (wait_tick(V, at) != X_OK) {
       return X_ERR;
@@ -1481,6 +1485,9 @@ static const builtin kBuiltins[] = {
     {"socket_read_ascii_float", b_unsupported, 0, P(NULL)},
     {"socket_read_binary_integer", b_unsupported, 0, P(NULL)},
     {"popup", b_unsupported, 0, P(NULL)},
+    {"set_gravity", b_unsupported, 0, P(NULL)},
+    {"set_tool_voltage", b_unsupported, 0, P(NULL)},
+    {"set_target_payload", b_unsupported, 0, P(NULL)},
     {"rpc_factory", b_unsupported, 0, P(NULL)},
     {"write_output_boolean_register", b_unsupported, 0, P(NULL)},
     {"write_output_integer_register", b_unsupported, 0, P(NULL)},

@@ -88,7 +88,7 @@ static const struct {
     {"local", T_LOCAL},   {"True", T_TRUE},     {"False", T_FALSE},   {"and", T_AND},
     {"or", T_OR},         {"not", T_NOT},       {"xor", T_XOR},       {"halt", T_HALT},
     {"break", T_BREAK},   {"continue", T_CONTINUE}, {"run", T_RUN},   {"join", T_JOIN},
-    {"kill", T_KILL},     {"for", T_FOR},       {"true", T_TRUE},     {"false", T_FALSE},
+    {"kill", T_KILL},     {"for", T_FOR},
 };
 
 typedef struct tok {

@@ -65,6 +65,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   static fake f;
   memset(&f, 0, sizeof f);
   f.s.safety_mode = URT_SAFETY_MODE_NORMAL;
+  f.s.robot_mode = URT_ROBOT_MODE_RUNNING;
   f.s.period = 0.002;
   urt_script_host_t host = {.ctx = &f, .submit = f_submit, .wait_tick = f_wait_tick,
                             .snapshot = f_snapshot, .message = f_message,

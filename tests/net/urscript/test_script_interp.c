@@ -235,6 +235,13 @@ static void test_interp__refused_motion_stops_the_program(void **state) {
   assert_int_equal(R.f.n_msg, 0);
 }
 
+static void test_interp__motion_while_powered_off_is_refused(void **state) {
+  R.f.s.robot_mode = URT_ROBOT_MODE_POWER_OFF;
+  R.f.motion_ticks = 1000000;  // the fake would never finish it: the runner must not hang
+  assert_int_equal(run_text("movej([0, 0, 0, 0, 0, 0])\n", 0), -1);
+  assert_string_equal(R.err.text, "movej: motion refused (robot is not running; robot mode 3)");
+}
+
 static void test_interp__runtime_errors_carry_line_and_column(void **state) {
   assert_int_equal(run_text("l = [1, 2]\nx = l[5]\n", 0), -1);
   assert_string_equal(R.err.text, "Index out of bounds: 5 (length 2)");
@@ -292,6 +299,7 @@ int main(void) {
       cmocka_unit_test_setup(test_interp__loop_that_never_yields_is_too_much_behind, setup),
       cmocka_unit_test_setup(test_interp__loop_with_sync_runs_until_stopped, setup),
       cmocka_unit_test_setup(test_interp__refused_motion_stops_the_program, setup),
+      cmocka_unit_test_setup(test_interp__motion_while_powered_off_is_refused, setup),
       cmocka_unit_test_setup(test_interp__runtime_errors_carry_line_and_column, setup),
       cmocka_unit_test_setup(test_interp__full_command_ring_is_retried_on_later_ticks, setup),
       cmocka_unit_test_setup(test_interp__secondary_program_must_not_block, setup),
