@@ -68,6 +68,7 @@ typedef struct vm {
   int depth;        /* current frame index */
   int eval_depth;
   sv retval;        /* heap-owned value of the last `return` */
+  bool halted;      /* `halt` inside a function: unwinds as X_ERR with no error */
   /* time */
   uint64_t tick;
   int64_t steps;
@@ -645,6 +646,10 @@ static int call_user(vm *V, const us_node *n, sv *out) {
     out->t = V_NONE;
   } else if (rc == X_BREAK || rc == X_CONTINUE) {
     return fail(V, n, "break or continue outside a loop");
+  } else if (rc == X_HALT) {
+    // expressions propagate anything but X_OK as X_ERR: remember it was a halt
+    V->halted = true;
+    return X_ERR;
   }
   return rc;
 }
@@ -1584,6 +1589,9 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
   }
   if (rc == X_BREAK || rc == X_CONTINUE) {
     rc = fail(V, d, "break or continue outside a loop");
+  }
+  if (rc == X_ERR && V->halted && err->kind == US_ERR_NONE) {
+    rc = X_HALT;
   }
 
   for (int k = 0; k <= MAX_CALL_DEPTH; k++) {

@@ -203,6 +203,12 @@ static void test_interp__functions_scopes_and_control_flow(void **state) {
   assert_string_equal(R.f.msg[3].text, "3.51");
 }
 
+static void test_interp__halt_inside_a_function_ends_the_program_normally(void **state) {
+  must_run("def stop_here():\n  halt\nend\ntextmsg(\"a\")\nx = 1 + stop_here()\ntextmsg(\"b\")\n");
+  assert_int_equal(R.f.n_msg, 1);
+  assert_int_equal(R.err.kind, US_ERR_NONE);
+}
+
 static void test_interp__pose_functions(void **state) {
   must_run("a = p[0.1, 0.2, 0.3, 0, 0, 1.5707963267948966]\n"
            "b = pose_trans(a, p[1, 0, 0, 0, 0, 0])\n"
@@ -295,6 +301,7 @@ int main(void) {
       cmocka_unit_test_setup(test_interp__io_and_settings, setup),
       cmocka_unit_test_setup(test_interp__textmsg_concatenates, setup),
       cmocka_unit_test_setup(test_interp__functions_scopes_and_control_flow, setup),
+      cmocka_unit_test_setup(test_interp__halt_inside_a_function_ends_the_program_normally, setup),
       cmocka_unit_test_setup(test_interp__pose_functions, setup),
       cmocka_unit_test_setup(test_interp__loop_that_never_yields_is_too_much_behind, setup),
       cmocka_unit_test_setup(test_interp__loop_with_sync_runs_until_stopped, setup),
