@@ -21,6 +21,7 @@
 #define MAX_EVAL_DEPTH 1024
 #define SUBMIT_RETRY_TICKS 100
 #define MAX_ARGS 8
+#define MAX_VAR_BYTES (64u << 20)  /* strings and lists held by variables, all frames */
 
 //---- values ----
 
@@ -69,6 +70,7 @@ typedef struct vm {
   int eval_depth;
   sv retval;        /* heap-owned value of the last `return` */
   bool halted;      /* `halt` inside a function: unwinds as X_ERR with no error */
+  size_t var_bytes; /* heap held by variables (bounded by MAX_VAR_BYTES) */
   /* time */
   uint64_t tick;
   int64_t steps;
@@ -270,18 +272,28 @@ static var *lookup_write(vm *V, const us_node *at, const us_name *name) {
   return v ? v : add_var(V, at, f, name);
 }
 
+static size_t vbytes(const sv *v) {
+  return v->t == V_STR ? (size_t)v->n + 1 : v->t == V_LIST ? (size_t)v->n * sizeof(sv) : 0;
+}
+
 static int store(vm *V, const us_node *at, var *dst, const sv *val) {
+  size_t before = V->var_bytes - vbytes(&dst->v);
+  if (before + vbytes(val) > MAX_VAR_BYTES) {
+    return fail(V, at, "Out of memory: variables hold more than %u bytes", MAX_VAR_BYTES);
+  }
   sv copy;
   if (!vdup(val, &copy)) {
     return fail(V, at, "Out of memory");
   }
   vfree(&dst->v);
   dst->v = copy;
+  V->var_bytes = before + vbytes(&copy);
   return X_OK;
 }
 
-static void frame_clear(frame *f) {
+static void frame_clear(vm *V, frame *f) {
   for (int k = 0; k < f->n; k++) {
+    V->var_bytes -= vbytes(&f->vars[k].v);
     vfree(&f->vars[k].v);
   }
   f->n = 0;
@@ -625,18 +637,18 @@ static int call_user(vm *V, const us_node *n, sv *out) {
 
   // run the body in a new frame
   frame *f = &V->frames[V->depth + 1];
-  frame_clear(f);
+  frame_clear(V, f);
   for (int j = 0; j < d->n; j++) {
     var *v = add_var(V, n, f, d->argn[j]);
     if (!v || store(V, n, v, &args[j]) != X_OK) {
-      frame_clear(f);
+      frame_clear(V, f);
       return X_ERR;
     }
   }
   V->depth++;
   int rc = exec_block(V, d->a);
   V->depth--;
-  frame_clear(f);
+  frame_clear(V, f);
   if (rc == X_RETURN) {
     rc = X_OK;
     bool ok = vscratch(V, n, &V->retval, out);
@@ -777,6 +789,7 @@ static int exec_stmt(vm *V, const us_node *n) {
       if (n->kind == N_GLOBAL && V->depth > 0) {
         // mark the name as the program's in this frame, then write there
         if (!v && !(v = add_var(V, n, f, n->name))) { rc = X_ERR; break; }
+        V->var_bytes -= vbytes(&v->v);
         vfree(&v->v);
         v->is_global = true;
         f = &V->frames[0];
@@ -1595,7 +1608,7 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
   }
 
   for (int k = 0; k <= MAX_CALL_DEPTH; k++) {
-    frame_clear(&V->frames[k]);
+    frame_clear(V, &V->frames[k]);
     free(V->frames[k].vars);
   }
   vfree(&V->retval);
