@@ -5,7 +5,7 @@
  * so it can neither crash nor hang.
  *
  *   clang -g -O1 -fsanitize=fuzzer,address,undefined -Inet/include -Icore/include \
- *     -Idrivers/include -Inet/urscript tests/fuzz/fuzz_urscript.c net/urscript/script_parse.c \
+ *     -Idrivers/include tests/fuzz/fuzz_urscript.c net/urscript/script_parse.c \
  *     net/urscript/script_interp.c -o /tmp/fuzz_urscript -lm -lpthread
  *   /tmp/fuzz_urscript -max_total_time=60 -rss_limit_mb=1024
  */
@@ -13,7 +13,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "script.h"
+#include "../../net/urscript/script.h"  /* private: the fuzzer drives parse + run directly */
 
 typedef struct fake {
   urt_snapshot_t s;
