@@ -1,0 +1,125 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * tests/net/urscript/fake_host.h — a fake controller behind urt_script_host_t: a virtual clock
+ * that advances one tick (2 ms) per wait_tick call, motions that finish after motion_ticks
+ * ticks, and a record of every command and message. Thread-safe (the runner calls it from its
+ * thread while the test reads). */
+#ifndef URT_TEST_FAKE_HOST_H
+#define URT_TEST_FAKE_HOST_H
+
+#include <pthread.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "urt/net/urscript.h"
+
+#define FAKE_MAX 256
+
+typedef struct fake_host {
+  pthread_mutex_t mu;
+  urt_snapshot_t s;
+  int motion_ticks;         /* ticks a motion takes (0: done on submit)        */
+  uint64_t motion_end;      /* tick at which the active motion finishes        */
+  uint64_t pending_id;      /* id of the active motion                         */
+  bool refuse_motion;       /* answer every motion with a protective stop      */
+  int full_for;             /* refuse this many submits (ring full)            */
+  int tick_sleep_us;        /* real time per tick (0: as fast as asked)        */
+  urt_ctrl_cmd_t cmd[FAKE_MAX];
+  int n_cmd;
+  urt_script_msg_t msg[FAKE_MAX];
+  int n_msg;
+} fake_host;
+
+static inline bool is_motion(int kind) {
+  return kind >= URT_CTRL_MOVEJ && kind <= URT_CTRL_STOPL;
+}
+
+static inline bool fake_submit(void *ctx, const urt_ctrl_cmd_t *c) {
+  fake_host *f = ctx;
+  pthread_mutex_lock(&f->mu);
+  if (f->full_for > 0) {
+    f->full_for--;
+    pthread_mutex_unlock(&f->mu);
+    return false;
+  }
+  if (f->n_cmd < FAKE_MAX) f->cmd[f->n_cmd++] = *c;
+  if (is_motion(c->kind)) {
+    if (f->refuse_motion) {
+      f->s.safety_mode = URT_SAFETY_MODE_PROTECTIVE_STOP;
+      f->s.ctrl_fault = URT_CTRL_FAULT_PSTOP;
+      f->s.motion_done_id = c->id;
+    } else if (f->motion_ticks == 0) {
+      f->s.motion_done_id = c->id;
+    } else {
+      f->pending_id = c->id;
+      f->motion_end = f->s.tick + (uint64_t)f->motion_ticks;
+    }
+    f->s.motion_id = c->id;
+  } else if (c->kind == URT_CTRL_SET_DIGITAL_OUT) {
+    f->s.digital_out = c->value != 0 ? f->s.digital_out | (1u << c->index)
+                                     : f->s.digital_out & ~(1u << c->index);
+  } else if (c->kind == URT_CTRL_PROGRAM_STATE) {
+    f->s.program_state = c->index;
+  } else if (c->kind == URT_CTRL_HALT) {
+    if (f->pending_id) f->s.motion_done_id = f->pending_id;
+    f->pending_id = 0;
+  }
+  pthread_mutex_unlock(&f->mu);
+  return true;
+}
+
+static inline uint64_t fake_wait_tick(void *ctx, uint64_t after, int timeout_ms) {
+  fake_host *f = ctx;
+  if (f->tick_sleep_us > 0) usleep((useconds_t)f->tick_sleep_us);
+  pthread_mutex_lock(&f->mu);
+  f->s.tick++;
+  f->s.time = (double)f->s.tick * f->s.period;
+  if (f->pending_id && f->s.tick >= f->motion_end) {
+    f->s.motion_done_id = f->pending_id;
+    f->pending_id = 0;
+  }
+  uint64_t t = f->s.tick;
+  pthread_mutex_unlock(&f->mu);
+  return t;
+}
+
+static inline void fake_snapshot(void *ctx, urt_snapshot_t *out) {
+  fake_host *f = ctx;
+  pthread_mutex_lock(&f->mu);
+  *out = f->s;
+  pthread_mutex_unlock(&f->mu);
+}
+
+static inline void fake_message(void *ctx, const urt_script_msg_t *m) {
+  fake_host *f = ctx;
+  pthread_mutex_lock(&f->mu);
+  if (f->n_msg < FAKE_MAX) f->msg[f->n_msg++] = *m;
+  pthread_mutex_unlock(&f->mu);
+}
+
+static inline int fake_ik(void *ctx, const double pose[6], const double qnear[URT_NJ],
+                          double q[URT_NJ]) {
+  for (int j = 0; j < 6; j++) q[j] = pose[j] + 100;  // recognisable
+  return 0;
+}
+
+static inline void fake_init(fake_host *f, urt_script_host_t *h) {
+  memset(f, 0, sizeof *f);
+  pthread_mutex_init(&f->mu, NULL);
+  f->s.period = 0.002;
+  f->s.safety_mode = URT_SAFETY_MODE_NORMAL;
+  f->s.robot_mode = URT_ROBOT_MODE_RUNNING;
+  f->s.program_state = URT_PROGRAM_STOPPED;
+  *h = (urt_script_host_t){.ctx = f, .submit = fake_submit, .wait_tick = fake_wait_tick,
+                           .snapshot = fake_snapshot, .message = fake_message,
+                           .inverse_kinematics = fake_ik};
+}
+
+/* index of the first command of a kind at or after from, or -1 */
+static inline int fake_find_cmd(fake_host *f, int kind, int from) {
+  for (int k = from; k < f->n_cmd; k++) {
+    if (f->cmd[k].kind == kind) return k;
+  }
+  return -1;
+}
+
+#endif

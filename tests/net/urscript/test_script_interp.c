@@ -1,0 +1,315 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * tests/net/urscript/test_script_interp.c — the interpreter against a fake controller:
+ * argument mapping and defaults, blocking in controller ticks, errors. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "fake_host.h"
+#include "script.h"
+#include "test_support.h"
+
+typedef struct run {
+  fake_host f;
+  urt_script_host_t host;
+  uint64_t motion_id;
+  us_err err;
+  int rc;
+} run;
+
+static run R;
+
+static int run_text(const char *text, int64_t budget) {
+  us_prog *p = NULL;
+  if (urt__us_parse(text, strlen(text), &p, &R.err) != 0) {
+    fail_msg("parse: %u:%u %s", R.err.line, R.err.column, R.err.text);
+  }
+  us_hooks h = {.host = &R.host, .motion_id = &R.motion_id, .step_budget = budget ? budget : 100000,
+                .wait_timeout_ms = 1};
+  R.rc = urt__us_run(p, &h, &R.err);
+  urt__us_prog_free(p);
+  return R.rc;
+}
+
+static int setup(void **state) {
+  fake_init(&R.f, &R.host);
+  R.motion_id = 0;
+  memset(&R.err, 0, sizeof R.err);
+  return 0;
+}
+
+static void must_run(const char *text) {
+  if (run_text(text, 0) != 0) {
+    fail_msg("run: %u:%u %s", R.err.line, R.err.column, R.err.text);
+  }
+}
+
+static void test_interp__movej_python_urx_arguments(void **state) {
+  must_run("movej([0.1, -1.5, 1.2, -1.0, -1.5, 0.0], a=0.1, v=0.05, r=0)\n");
+  assert_int_equal(R.f.n_cmd, 1);
+  const urt_ctrl_cmd_t *c = &R.f.cmd[0];
+  assert_int_equal(c->kind, URT_CTRL_MOVEJ);
+  assert_int_equal(c->id, 1);
+  assert_near(c->q[1], -1.5, 0);
+  assert_near(c->a, 0.1, 0);
+  assert_near(c->v, 0.05, 0);
+  assert_near(c->t, 0, 0);
+  assert_near(c->r, 0, 0);
+}
+
+static void test_interp__movej_defaults_and_pose_through_ik(void **state) {
+  must_run("movej([0, 0, 0, 0, 0, 0])\nmovej(p[0.1, 0, 0, 0, 0, 0], 2, 3, 4, 0.01)\n");
+  assert_int_equal(R.f.n_cmd, 2);
+  assert_near(R.f.cmd[0].a, 1.4, 0);
+  assert_near(R.f.cmd[0].v, 1.05, 0);
+  assert_near(R.f.cmd[1].q[0], 100.1, 1e-12);  // the fake IK adds 100
+  assert_near(R.f.cmd[1].a, 2, 0);
+  assert_near(R.f.cmd[1].v, 3, 0);
+  assert_near(R.f.cmd[1].t, 4, 0);
+  assert_near(R.f.cmd[1].r, 0.01, 0);
+  assert_int_equal(R.f.cmd[1].id, 2);
+}
+
+static void test_interp__movel_defaults(void **state) {
+  must_run("movel(p[0.1, 0.2, 0.3, 0, 3.14, 0], t=2)\n");
+  const urt_ctrl_cmd_t *c = &R.f.cmd[0];
+  assert_int_equal(c->kind, URT_CTRL_MOVEL);
+  assert_near(c->pose[2], 0.3, 0);
+  assert_near(c->a, 1.2, 0);
+  assert_near(c->v, 0.25, 0);
+  assert_near(c->t, 2, 0);
+}
+
+static void test_interp__movel_with_joints_needs_forward_kinematics(void **state) {
+  assert_int_equal(run_text("movel([0, 0, 0, 0, 0, 0])\n", 0), -1);
+  assert_string_equal(R.err.text, "Forward kinematics is not available");
+  assert_int_equal(R.f.n_cmd, 0);
+}
+
+static void test_interp__blocking_motion_waits_for_the_controller(void **state) {
+  R.f.motion_ticks = 25;
+  must_run("movej([0, 0, 0, 0, 0, 0])\n");
+  assert_true(R.f.s.tick >= 25);
+  assert_int_equal(R.f.s.motion_done_id, 1);
+}
+
+static void test_interp__servoj_blocks_t_and_maps_arguments(void **state) {
+  must_run("servoj([0.1, -1.5, 1.2, -1.0, -1.5, 0.0], a=0.1, v=0.05, t=0.008, lookahead_time=0.05, gain=500)\n");
+  const urt_ctrl_cmd_t *c = &R.f.cmd[0];
+  assert_int_equal(c->kind, URT_CTRL_SERVOJ);
+  assert_near(c->t, 0.008, 0);
+  assert_near(c->lookahead_time, 0.05, 0);
+  assert_near(c->gain, 500, 0);
+  assert_int_equal(R.f.s.tick, 4);  // 8 ms at 2 ms per tick
+  setup(NULL);
+  must_run("servoj([0, 0, 0, 0, 0, 0])\n");
+  assert_near(R.f.cmd[0].t, 0.002, 0);
+  assert_near(R.f.cmd[0].lookahead_time, 0.1, 0);
+  assert_near(R.f.cmd[0].gain, 300, 0);
+  assert_int_equal(R.f.s.tick, 1);
+}
+
+static void test_interp__speedj_with_t_blocks_t(void **state) {
+  must_run("speedj([0.1, 0, 0, 0, 0, 0], 0.5, 0.1)\n");
+  assert_int_equal(R.f.cmd[0].kind, URT_CTRL_SPEEDJ);
+  assert_near(R.f.cmd[0].q[0], 0.1, 0);
+  assert_near(R.f.cmd[0].a, 0.5, 0);
+  assert_near(R.f.cmd[0].t, 0.1, 0);
+  assert_int_equal(R.f.s.tick, 50);
+}
+
+static void test_interp__stopj_and_stopl(void **state) {
+  must_run("stopj(2)\nstopl(10)\n");
+  assert_int_equal(R.f.cmd[0].kind, URT_CTRL_STOPJ);
+  assert_near(R.f.cmd[0].a, 2, 0);
+  assert_int_equal(R.f.cmd[1].kind, URT_CTRL_STOPL);
+  assert_near(R.f.cmd[1].a_rot, 10, 0);
+}
+
+static void test_interp__sleep_counts_controller_ticks(void **state) {
+  must_run("sleep(0.1)\n");
+  assert_int_equal(R.f.s.tick, 50);
+  setup(NULL);
+  must_run("sync()\nsync()\n");
+  assert_int_equal(R.f.s.tick, 2);
+}
+
+static void test_interp__io_and_settings(void **state) {
+  must_run("digital_out[2]=True\nset_standard_digital_out(3, True)\n"
+           "set_configurable_digital_out(1, True)\nset_tool_digital_out(1, True)\n"
+           "set_analog_out(1, 0.25)\nset_tcp(p[0.0, 0.0, 0.1, 0, 0, 0])\n"
+           "set_payload(1.5, (0, 0, 0.05))\n"
+           "if not get_standard_digital_out(2) or not digital_out[3] then\n  halt\nend\n"
+           "set_digital_out(2, False)\n");
+  assert_int_equal(R.f.cmd[0].kind, URT_CTRL_SET_DIGITAL_OUT);
+  assert_int_equal(R.f.cmd[0].index, 2);
+  assert_near(R.f.cmd[0].value, 1, 0);
+  assert_int_equal(R.f.cmd[1].index, 3);
+  assert_int_equal(R.f.cmd[2].index, 9);
+  assert_int_equal(R.f.cmd[3].index, 17);
+  assert_int_equal(R.f.cmd[4].kind, URT_CTRL_SET_ANALOG_OUT);
+  assert_near(R.f.cmd[4].value, 0.25, 0);
+  assert_int_equal(R.f.cmd[5].kind, URT_CTRL_SET_TCP);
+  assert_near(R.f.cmd[5].pose[2], 0.1, 0);
+  assert_int_equal(R.f.cmd[6].kind, URT_CTRL_SET_PAYLOAD);
+  assert_near(R.f.cmd[6].value, 1.5, 0);
+  assert_near(R.f.cmd[6].pose[2], 0.05, 0);
+  assert_int_equal(R.f.n_cmd, 8);  // the halt did not happen: the reads saw the outputs
+  assert_int_equal(R.f.s.digital_out, (1u << 3) | (1u << 9) | (1u << 17));
+}
+
+static void test_interp__textmsg_concatenates(void **state) {
+  R.f.s.tcp_pose[0] = 0.605825;
+  must_run("textmsg(\"log \", get_actual_tcp_pose())\ntextmsg(1)\ntextmsg(str_cat(\"a\", 2.5), True)\n");
+  assert_int_equal(R.f.n_msg, 3);
+  assert_int_equal(R.f.msg[0].kind, URT_SCRIPT_MSG_TEXT);
+  assert_string_equal(R.f.msg[0].text, "log p[0.605825,0,0,0,0,0]");
+  assert_string_equal(R.f.msg[1].text, "1");
+  assert_string_equal(R.f.msg[2].text, "a2.5True");
+}
+
+static void test_interp__functions_scopes_and_control_flow(void **state) {
+  must_run("def prog():\n"
+           "  global n = 0\n"
+           "  def bump(k=1):\n"
+           "    global n\n"
+           "    n = n + k\n"
+           "    local tmp = n * 2\n"
+           "    return tmp\n"
+           "  end\n"
+           "  def fact(x):\n"
+           "    if x <= 1: return 1 end\n"
+           "    return x * fact(x - 1)\n"
+           "  end\n"
+           "  i = 0\n"
+           "  while True:\n"
+           "    i = i + 1\n"
+           "    if i > 10: break end\n"
+           "    if i % 2 == 0: continue end\n"
+           "    r = bump(k=i)\n"
+           "  end\n"
+           "  l = [1, 2, 3]\n"
+           "  l[1] = fact(5)\n"
+           "  q = p[0, 0, 0, 0, 0, 0]\n"
+           "  q[2] = 0.5\n"
+           "  textmsg(n, r)\n"
+           "  textmsg(l, q)\n"
+           "  textmsg(floor(2.7) + ceil(0.2), sqrt(16.0))\n"
+           "  textmsg(7 / 2, 7 % 3)\n"
+           "end\n");
+  assert_string_equal(R.f.msg[0].text, "2550");  // 1+3+5+7+9 = 25, returns 50
+  assert_string_equal(R.f.msg[1].text, "[1,120,3]p[0,0,0.5,0,0,0]");
+  assert_string_equal(R.f.msg[2].text, "34");
+  assert_string_equal(R.f.msg[3].text, "3.51");
+}
+
+static void test_interp__halt_inside_a_function_ends_the_program_normally(void **state) {
+  must_run("def stop_here():\n  halt\nend\ntextmsg(\"a\")\nx = 1 + stop_here()\ntextmsg(\"b\")\n");
+  assert_int_equal(R.f.n_msg, 1);
+  assert_int_equal(R.err.kind, US_ERR_NONE);
+}
+
+static void test_interp__pose_functions(void **state) {
+  must_run("a = p[0.1, 0.2, 0.3, 0, 0, 1.5707963267948966]\n"
+           "b = pose_trans(a, p[1, 0, 0, 0, 0, 0])\n"
+           "c = pose_trans(a, pose_inv(a))\n"
+           "textmsg(b)\ntextmsg(norm(c), pose_add(a, p[1, 1, 1, 0, 0, 0]))\n");
+  assert_string_equal(R.f.msg[0].text, "p[0.1,1.2,0.3,0,0,1.5708]");
+  assert_non_null(strstr(R.f.msg[1].text, "p[1.1,1.2,1.3,0,0,1.5708]"));
+}
+
+static void test_interp__loop_that_never_yields_is_too_much_behind(void **state) {
+  assert_int_equal(run_text("def f():\n  x = 0\n  while True:\n    x = 1\n  end\nend\n", 10000), -1);
+  assert_int_equal(R.err.kind, US_ERR_RUNTIME);
+  assert_string_equal(R.err.text, "Runtime is too much behind");
+  assert_int_equal(R.err.line, 4);
+}
+
+static void test_interp__loop_with_sync_runs_until_stopped(void **state) {
+  // the budget resets at every tick: this runs 300 ticks without complaint
+  must_run("i = 0\nwhile i < 300:\n  j = 0\n  while j < 20:\n    j = j + 1\n  end\n  i = i + 1\n  sync()\nend\n");
+  assert_int_equal(R.f.s.tick, 300);
+}
+
+static void test_interp__refused_motion_stops_the_program(void **state) {
+  R.f.refuse_motion = true;
+  assert_int_equal(run_text("movej([0, 0, 0, 0, 0, 0])\ntextmsg(\"after\")\n", 0), -1);
+  assert_int_equal(R.err.kind, US_ERR_RUNTIME);
+  assert_non_null(strstr(R.err.text, "movej: motion refused or aborted (protective stop"));
+  assert_int_equal(R.err.line, 1);
+  assert_int_equal(R.err.column, 1);
+  assert_int_equal(R.f.n_msg, 0);
+}
+
+static void test_interp__motion_while_powered_off_is_refused(void **state) {
+  R.f.s.robot_mode = URT_ROBOT_MODE_POWER_OFF;
+  R.f.motion_ticks = 1000000;  // the fake would never finish it: the runner must not hang
+  assert_int_equal(run_text("movej([0, 0, 0, 0, 0, 0])\n", 0), -1);
+  assert_string_equal(R.err.text, "movej: motion refused (robot is not running; robot mode 3)");
+}
+
+static void test_interp__runtime_errors_carry_line_and_column(void **state) {
+  assert_int_equal(run_text("l = [1, 2]\nx = l[5]\n", 0), -1);
+  assert_string_equal(R.err.text, "Index out of bounds: 5 (length 2)");
+  assert_int_equal(R.err.line, 2);
+  assert_int_equal(R.err.column, 7);
+  setup(NULL);
+  assert_int_equal(run_text("x = 1 / 0\n", 0), -1);
+  assert_string_equal(R.err.text, "Division by zero");
+  setup(NULL);
+  assert_int_equal(run_text("movej([1, 2])\n", 0), -1);
+  assert_non_null(strstr(R.err.text, "Type error"));
+  assert_int_equal(R.f.n_cmd, 0);
+  setup(NULL);
+  assert_int_equal(run_text("movej([0,0,0,0,0,0], speed=1)\n", 0), -1);
+  assert_string_equal(R.err.text, "Type error: movej has no parameter speed");
+  setup(NULL);
+  assert_int_equal(run_text("socket_open(\"1.2.3.4\", 5)\n", 0), -1);
+  assert_string_equal(R.err.text, "socket_open is not supported by urtwin");
+}
+
+static void test_interp__full_command_ring_is_retried_on_later_ticks(void **state) {
+  R.f.full_for = 3;
+  must_run("set_digital_out(1, True)\n");
+  assert_int_equal(R.f.n_cmd, 1);
+  assert_int_equal(R.f.s.tick, 3);
+}
+
+static void test_interp__secondary_program_must_not_block(void **state) {
+  us_prog *p = NULL;
+  const char *text = "sec s():\n  set_digital_out(1, True)\n  sleep(1)\nend\n";
+  assert_int_equal(urt__us_parse(text, strlen(text), &p, &R.err), 0);
+  us_hooks h = {.host = &R.host, .motion_id = &R.motion_id, .step_budget = 1000, .wait_timeout_ms = 1};
+  assert_int_equal(urt__us_run(p, &h, &R.err), -1);
+  urt__us_prog_free(p);
+  assert_string_equal(R.err.text, "Blocking call in a secondary program");
+  assert_int_equal(R.err.line, 3);
+  assert_int_equal(R.f.n_cmd, 1);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test_setup(test_interp__movej_python_urx_arguments, setup),
+      cmocka_unit_test_setup(test_interp__movej_defaults_and_pose_through_ik, setup),
+      cmocka_unit_test_setup(test_interp__movel_defaults, setup),
+      cmocka_unit_test_setup(test_interp__movel_with_joints_needs_forward_kinematics, setup),
+      cmocka_unit_test_setup(test_interp__blocking_motion_waits_for_the_controller, setup),
+      cmocka_unit_test_setup(test_interp__servoj_blocks_t_and_maps_arguments, setup),
+      cmocka_unit_test_setup(test_interp__speedj_with_t_blocks_t, setup),
+      cmocka_unit_test_setup(test_interp__stopj_and_stopl, setup),
+      cmocka_unit_test_setup(test_interp__sleep_counts_controller_ticks, setup),
+      cmocka_unit_test_setup(test_interp__io_and_settings, setup),
+      cmocka_unit_test_setup(test_interp__textmsg_concatenates, setup),
+      cmocka_unit_test_setup(test_interp__functions_scopes_and_control_flow, setup),
+      cmocka_unit_test_setup(test_interp__halt_inside_a_function_ends_the_program_normally, setup),
+      cmocka_unit_test_setup(test_interp__pose_functions, setup),
+      cmocka_unit_test_setup(test_interp__loop_that_never_yields_is_too_much_behind, setup),
+      cmocka_unit_test_setup(test_interp__loop_with_sync_runs_until_stopped, setup),
+      cmocka_unit_test_setup(test_interp__refused_motion_stops_the_program, setup),
+      cmocka_unit_test_setup(test_interp__motion_while_powered_off_is_refused, setup),
+      cmocka_unit_test_setup(test_interp__runtime_errors_carry_line_and_column, setup),
+      cmocka_unit_test_setup(test_interp__full_command_ring_is_retried_on_later_ticks, setup),
+      cmocka_unit_test_setup(test_interp__secondary_program_must_not_block, setup),
+  };
+  return cmocka_run_group_tests_name("net/urscript/script_interp", tests, NULL, NULL);
+}
