@@ -61,6 +61,7 @@ typedef enum urt_rtde_type {
 #define URT_RTDE_INPUT_POOL 4096         /* fields over all input recipes of a connection   */
 #define URT_RTDE_NREG 48                 /* int and double registers per direction          */
 #define URT_RTDE_NBITREG 128             /* bit registers per direction                     */
+#define URT_RTDE_MAX_DATA (4 + URT_RTDE_MAX_FIELDS * 48)  /* largest data package [bytes]   */
 
 /* Token of a type as UR writes it ("DOUBLE", "VECTOR6D", …); its size on the wire [bytes]. */
 const char *urt_rtde_type_name(urt_rtde_type_t t);
