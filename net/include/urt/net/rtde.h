@@ -8,7 +8,7 @@
  *   every controller tick: urt_rtde_session_encode_data(session, snapshot, registers) ──▶ U
  *
  * Nothing here touches a socket, a clock, a global or the heap: the caller owns every struct
- * (a session is ~40 kB; allocate it once per connection). Context: the I/O thread only; nothing
+ * (a session is ~45 kB; allocate it once per connection). Context: the I/O thread only; nothing
  * is thread-safe.
  */
 #ifndef URT_NET_RTDE_H
