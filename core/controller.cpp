@@ -612,7 +612,9 @@ bool ik_newton(const urt_arm_params_t& a, const double tcp[6], const Mat3& R_goa
       return true;
     }
     prev = err;
-    Vec6 dq = dls_solve(J, e, dls_lambda(J) * (err > 1e-6 ? 1.0 : 0.0));
+    // Levenberg–Marquardt-like damping that vanishes with the error: quadratic convergence
+    // near the solution, bounded steps near singular configurations
+    Vec6 dq = dls_solve(J, e, std::fmin(0.05, 0.1 * err));
     double n = dq.cwiseAbs().maxCoeff();
     if (n > 0.3) {
       dq *= 0.3 / n;

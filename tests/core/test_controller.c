@@ -133,10 +133,452 @@ static void test_movej__trapezoid_time_and_settling_cb3(void **state) {
   movej_shoulder(0.008);
 }
 
+
+static void tcp_actual(const rig_t *r, double pose[6]) {
+  double q[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = q_act(r, j);
+  }
+  urt_ctrl_forward_kinematics_tcp(r->m, r->c->tcp_offset, q, pose);
+}
+
+static void test_movel__straight_10_cm(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  double p0[6], p1[6];
+  tcp_actual(&r, p0);
+  memcpy(p1, p0, sizeof p1);
+  double dir[3] = {0.6, -0.48, 0.64};  // unit vector, 10 cm along it
+  for (int i = 0; i < 3; i++) {
+    p1[i] += 0.1 * dir[i];
+  }
+  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_MOVEL);
+  memcpy(c.pose, p1, sizeof c.pose);
+  c.a = 1.2;
+  c.v = 0.25;
+  double t = 0.0, dev = 0.0, dev_rot = 0.0;
+  rig_period(&r, &c);
+  while (r.c->motion_done_id < c.id && t < 3.0) {
+    rig_period(&r, NULL);
+    t += r.c->period;
+    double p[6];
+    tcp_actual(&r, p);
+    double v[3] = {p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]};
+    double along = v[0] * dir[0] + v[1] * dir[1] + v[2] * dir[2];
+    double perp2 = 0.0;
+    for (int i = 0; i < 3; i++) {
+      double e = v[i] - along * dir[i];
+      perp2 += e * e;
+    }
+    dev = fmax(dev, sqrt(perp2));
+    for (int i = 3; i < 6; i++) {
+      dev_rot = fmax(dev_rot, fabs(p[i] - p0[i]));
+    }
+  }
+  run_for(&r, 0.3);
+  double p[6];
+  tcp_actual(&r, p);
+  double end = sqrt((p[0] - p1[0]) * (p[0] - p1[0]) + (p[1] - p1[1]) * (p[1] - p1[1]) +
+                    (p[2] - p1[2]) * (p[2] - p1[2]));
+  double ideal = trap_time(0.1, 1.2, 0.25);
+  print_message("movel 10 cm: %.3f s (ideal %.3f s); max deviation from the line %.4f mm, "
+                "orientation %.2e rad; end error %.4f mm; pstop %u\n",
+                t, ideal, 1e3 * dev, dev_rot, 1e3 * end, r.d->pstop);
+  assert_int_equal(r.d->pstop, 0);
+  assert_true(dev <= 1e-4);
+  assert_true(end <= 1e-4);
+  assert_true(fabs(t - ideal) <= 0.1 * ideal);
+  rig_free(&r);
+}
+
+static void test_servoj__sine_lags_by_lookahead(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  const double A = 0.2, w = 2.0 * M_PI * 0.5, la = 0.1;
+  double base[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    base[j] = q_act(&r, j);
+  }
+  const int n = (int)lround(5.0 / r.c->period), n0 = n / 2;
+  static double act[2500][2];
+  assert_true(n - n0 <= 2500);
+  for (int k = 0; k < n; k++) {
+    double t = k * r.c->period;
+    urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SERVOJ);
+    memcpy(c.q, base, sizeof c.q);
+    c.q[0] += A * sin(w * t);
+    c.q[1] += A * sin(w * t);
+    c.t = r.c->period;
+    c.lookahead_time = la;
+    c.gain = 300.0;
+    rig_period(&r, &c);
+    if (k >= n0) {
+      // the actual position at the end of this period (time t + period)
+      act[k - n0][0] = q_act(&r, 0) - base[0];
+      act[k - n0][1] = q_act(&r, 1) - base[1];
+    }
+  }
+  assert_int_equal(r.d->pstop, 0);
+  double lags[2];
+  for (int j = 0; j < 2; j++) {
+    double best = HUGE_VAL, best_lag = 0.0;
+    for (double lag = 0.0; lag <= 0.3; lag += 1e-4) {
+      double e = 0.0;
+      for (int k = n0; k < n; k++) {
+        double t = (k + 1) * r.c->period;
+        double d = act[k - n0][j] - A * sin(w * (t - lag));
+        e += d * d;
+      }
+      if (e < best) {
+        best = e;
+        best_lag = lag;
+      }
+    }
+    lags[j] = best_lag;
+  }
+  print_message("servoj 0.5 Hz sine at 500 Hz, lookahead %.2f s, gain 300: lag base %.4f s, "
+                "shoulder %.4f s (bound %.4f s)\n",
+                la, lags[0], lags[1], la + 2 * r.c->period);
+  assert_true(lags[0] <= la + 2 * r.c->period);
+  assert_true(lags[1] <= la + 2 * r.c->period);
+  // streaming stops: the arm comes to rest
+  run_for(&r, 1.0);
+  assert_int_equal(r.c->motion, URT_MOTION_IDLE);
+  for (int j = 0; j < URT_NJ; j++) {
+    assert_true(fabs(r.d->x[j][URT_X_QD]) < 1e-3);
+  }
+  rig_free(&r);
+}
+
+static void test_speedj__moves_by_commanded_amount_then_stopj_to_rest(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  const double qd[URT_NJ] = {0.2, -0.3, 0.25, 0.4, -0.4, 0.5}, a = 1.5;
+  double q0[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    q0[j] = q_act(&r, j);
+  }
+  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SPEEDJ);
+  memcpy(c.q, qd, sizeof c.q);
+  c.a = a;
+  rig_period(&r, &c);
+  run_for(&r, 1.0 - r.c->period);
+  double tr = 0.5 / a, worst = 0.0;
+  for (int j = 0; j < URT_NJ; j++) {
+    double want = qd[j] * (1.0 - 0.5 * tr), got = q_act(&r, j) - q0[j];
+    worst = fmax(worst, fabs(got - want) / fabs(want));
+  }
+  assert_true(r.c->motion_done_id >= c.id);  // speed reached
+  urt_ctrl_cmd_t s = cmd_of(&r, URT_CTRL_STOPJ);
+  s.a = 2.0;
+  double t_stop = run_until_done(&r, &s, 2.0);
+  run_for(&r, 0.1);
+  double vmax = 0.0;
+  for (int j = 0; j < URT_NJ; j++) {
+    vmax = fmax(vmax, fabs(r.d->x[j][URT_X_QD]));
+  }
+  print_message("speedj 1 s: worst displacement error %.2f %%; stopj(2.0) took %.3f s "
+                "(ideal %.3f s), |qd| 0.1 s later %.2e rad/s\n",
+                100.0 * worst, t_stop, 0.5 / 2.0, vmax);
+  assert_true(worst <= 0.05);
+  assert_int_equal(r.c->motion, URT_MOTION_IDLE);
+  assert_true(vmax < 1e-3);
+  assert_int_equal(r.d->pstop, 0);
+  rig_free(&r);
+}
+
+static double urand(unsigned *s) {
+  *s = *s * 1103515245u + 12345u;
+  return ((*s >> 8) & 0xffffff) / (double)0x1000000;
+}
+
+static double det6(const double *A) {
+  double a[36], d = 1.0;
+  memcpy(a, A, sizeof a);
+  for (int c = 0; c < 6; c++) {
+    int p = c;
+    for (int r = c + 1; r < 6; r++) {
+      if (fabs(a[r * 6 + c]) > fabs(a[p * 6 + c])) {
+        p = r;
+      }
+    }
+    if (p != c) {
+      for (int k = 0; k < 6; k++) {
+        double t = a[c * 6 + k];
+        a[c * 6 + k] = a[p * 6 + k];
+        a[p * 6 + k] = t;
+      }
+      d = -d;
+    }
+    d *= a[c * 6 + c];
+    for (int r = c + 1; r < 6; r++) {
+      double f = a[r * 6 + c] / a[c * 6 + c];
+      for (int k = c; k < 6; k++) {
+        a[r * 6 + k] -= f * a[c * 6 + k];
+      }
+    }
+  }
+  return d;
+}
+
+static void test_inverse_kinematics__round_trip(void **state) {
+  (void)state;
+  urt_model_t *m = urt_test_model(NULL);
+  unsigned seed = 7;
+  double worst = 0.0, worst_far = 0.0;
+  int n = 200, far_ok = 0;
+  for (int i = 0; i < n; i++) {
+    double q[URT_NJ], qnear[URT_NJ], qik[URT_NJ], pose[6];
+    for (int j = 0; j < URT_NJ; j++) {
+      q[j] = M_PI * (2.0 * urand(&seed) - 1.0);
+    }
+    // away from the elbow and wrist singularities
+    q[2] = (urand(&seed) < 0.5 ? -1.0 : 1.0) * (0.3 + 2.5 * urand(&seed));
+    q[4] = (urand(&seed) < 0.5 ? -1.0 : 1.0) * (0.3 + 2.5 * urand(&seed));
+    // and the shoulder one (|det J| ~ 0.01–0.1 away from every singularity): near a singular
+    // pose two IK branches are closer than qnear's offset
+    double J[36];
+    urt_arm_jacobian(m, q, J);
+    if (fabs(det6(J)) < 2e-3) {
+      i--;
+      continue;
+    }
+    urt_arm_tcp_pose(m, q, pose);
+    for (int j = 0; j < URT_NJ; j++) {
+      qnear[j] = q[j] + 0.05 * (2.0 * urand(&seed) - 1.0);
+    }
+    assert_int_equal(urt_ctrl_inverse_kinematics(m, pose, qnear, qik), 0);
+    for (int j = 0; j < URT_NJ; j++) {
+      worst = fmax(worst, fabs(qik[j] - q[j]));
+    }
+    // from far away: some solution of the same pose
+    for (int j = 0; j < URT_NJ; j++) {
+      qnear[j] = q[j] + 0.8 * (2.0 * urand(&seed) - 1.0);
+    }
+    if (urt_ctrl_inverse_kinematics(m, pose, qnear, qik) == 0) {
+      double p2[6];
+      urt_arm_tcp_pose(m, qik, p2);
+      for (int k = 0; k < 6; k++) {
+        worst_far = fmax(worst_far, fabs(p2[k] - pose[k]));
+      }
+      far_ok++;
+    }
+  }
+  double unreachable[6] = {2.0, 0.0, 0.5, 0.0, 0.0, 0.0}, q0[URT_NJ] = {0}, qx[URT_NJ];
+  int rc = urt_ctrl_inverse_kinematics(m, unreachable, q0, qx);
+  print_message("IK round trip, %d random poses, qnear within 0.05 rad: worst joint error "
+                "%.2e rad; qnear within 0.8 rad: %d/%d solved, worst pose error %.2e; "
+                "2 m away: rc %d\n",
+                n, worst, far_ok, n, worst_far, rc);
+  assert_true(worst <= 1e-9);
+  assert_true(worst_far <= 1e-9);
+  assert_int_equal(rc, URT_ERANGE);
+  urt_model_free(m);
+}
+
+static int state_finite(const urt_data_t *d) {
+  for (int j = 0; j < URT_NJ; j++) {
+    for (int i = 0; i < URT_NXJ; i++) {
+      if (!isfinite(d->x[j][i])) {
+        return 0;
+      }
+    }
+  }
+  return 1;
+}
+
+static void test_bad_target__protective_stop_then_unlock(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  double q[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = q_act(&r, j);
+  }
+  // start moving, then a NaN target arrives
+  double q2[URT_NJ];
+  memcpy(q2, q, sizeof q2);
+  q2[0] += 0.5;
+  urt_ctrl_cmd_t c = movej_to(&r, q2, 1.4, 1.05);
+  rig_period(&r, &c);
+  run_for(&r, 0.2);
+  q2[3] = NAN;
+  urt_ctrl_cmd_t bad = movej_to(&r, q2, 1.4, 1.05);
+  rig_period(&r, &bad);
+  assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_PROTECTIVE_STOP);
+  assert_true(r.c->fault & URT_CTRL_FAULT_BAD_TARGET);
+  assert_true(r.d->pstop & URT_PSTOP_NONFINITE_CMD);
+  assert_true(r.c->motion_done_id >= bad.id);
+  assert_true(r.c->motion_done_id >= c.id);
+  run_for(&r, 0.3);
+  assert_true(state_finite(r.d));
+  for (int j = 0; j < URT_NJ; j++) {
+    assert_true(isfinite(r.c->q1[j]));
+  }
+  // refused while stopped
+  urt_ctrl_cmd_t c2 = movej_to(&r, q, 1.4, 1.05);
+  rig_period(&r, &c2);
+  assert_true(r.c->fault & URT_CTRL_FAULT_NOT_RUNNING);
+  assert_true(r.c->motion_done_id >= c2.id);
+  // out of the joint range is a protective stop too, after an unlock
+  urt_ctrl_cmd_t u = cmd_of(&r, URT_CTRL_UNLOCK_PSTOP);
+  rig_period(&r, &u);
+  assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
+  assert_int_equal(r.d->pstop, 0);
+  memcpy(q2, q, sizeof q2);
+  q2[1] = 7.0;
+  urt_ctrl_cmd_t far = movej_to(&r, q2, 1.4, 1.05);
+  rig_period(&r, &far);
+  assert_true(r.d->pstop & URT_PSTOP_POS_LIMIT);
+  rig_period(&r, &u);
+  // and a plain bad argument is refused without a stop
+  urt_ctrl_cmd_t arg = movej_to(&r, q, -1.0, 1.05);
+  rig_period(&r, &arg);
+  assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
+  assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
+  urt_ctrl_cmd_t sv = cmd_of(&r, URT_CTRL_SERVOJ);
+  memcpy(sv.q, q, sizeof sv.q);
+  sv.lookahead_time = 0.1;
+  sv.gain = 5000.0;
+  rig_period(&r, &sv);
+  assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
+  // back to work
+  double t = run_until_done(&r, &c, 0.01);
+  (void)t;
+  urt_ctrl_cmd_t ok = movej_to(&r, q, 1.4, 1.05);
+  run_until_done(&r, &ok, 3.0);
+  run_for(&r, 0.3);
+  print_message("after NaN stop and unlock, movej home: error %.2e rad\n", fabs(q_act(&r, 0) - q[0]));
+  assert_true(fabs(q_act(&r, 0) - q[0]) < 1e-4);
+  assert_int_equal(r.c->fault, 0);
+  rig_free(&r);
+}
+
+static void test_state_machine__motion_refused_until_running(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 0);
+  assert_int_equal(r.c->robot_mode, URT_ROBOT_MODE_POWER_OFF);
+  double q[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = q_act(&r, j);
+  }
+  double q2[URT_NJ];
+  memcpy(q2, q, sizeof q2);
+  q2[0] += 0.3;
+  urt_ctrl_cmd_t c = movej_to(&r, q2, 1.4, 1.05);
+  rig_period(&r, &c);
+  assert_true(r.c->fault & URT_CTRL_FAULT_NOT_RUNNING);
+  assert_true(r.c->motion_done_id >= c.id);
+  run_for(&r, 0.2);
+  assert_true(fabs(q_act(&r, 0) - q[0]) < 1e-4);  // held
+  urt_ctrl_cmd_t on = cmd_of(&r, URT_CTRL_POWER_ON);
+  rig_period(&r, &on);
+  assert_int_equal(r.c->robot_mode, URT_ROBOT_MODE_IDLE);
+  urt_ctrl_cmd_t c2 = movej_to(&r, q2, 1.4, 1.05);
+  rig_period(&r, &c2);
+  assert_true(r.c->motion_done_id >= c2.id);
+  assert_int_equal(r.c->motion, URT_MOTION_IDLE);
+  urt_ctrl_cmd_t br = cmd_of(&r, URT_CTRL_BRAKE_RELEASE);
+  rig_period(&r, &br);
+  assert_int_equal(r.c->robot_mode, URT_ROBOT_MODE_RUNNING);
+  urt_ctrl_cmd_t c3 = movej_to(&r, q2, 1.4, 1.05);
+  run_until_done(&r, &c3, 3.0);
+  run_for(&r, 0.2);
+  assert_true(fabs(q_act(&r, 0) - q2[0]) < 1e-4);
+  // power off in the middle of a move: the motion ends, the arm holds
+  urt_ctrl_cmd_t c4 = movej_to(&r, q, 1.4, 1.05);
+  rig_period(&r, &c4);
+  run_for(&r, 0.1);
+  urt_ctrl_cmd_t off = cmd_of(&r, URT_CTRL_POWER_OFF);
+  rig_period(&r, &off);
+  assert_int_equal(r.c->robot_mode, URT_ROBOT_MODE_POWER_OFF);
+  assert_true(r.c->motion_done_id >= c4.id);
+  run_for(&r, 0.5);
+  assert_true(fabs(r.d->x[0][URT_X_QD]) < 1e-3);
+  assert_int_equal(r.d->pstop, 0);
+  rig_free(&r);
+}
+
+static void test_speed_slider__half_doubles_movej_time(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  urt_ctrl_cmd_t sl = cmd_of(&r, URT_CTRL_SET_SPEED_SLIDER);
+  sl.value = 0.5;
+  rig_period(&r, &sl);
+  run_for(&r, 0.3);
+  assert_near(r.c->speed_scaling, 0.5, 1e-12);
+  double q[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = q_act(&r, j);
+  }
+  double D = 30.0 * M_PI / 180.0;
+  q[1] += D;
+  urt_ctrl_cmd_t c = movej_to(&r, q, 1.4, 1.05);
+  double t = run_until_done(&r, &c, 5.0);
+  double ideal = trap_time(D, 1.4, 1.05);
+  run_for(&r, 0.3);
+  print_message("speed slider 0.5: movej took %.4f s = %.3f × the full-speed %.4f s; error %.2e\n",
+                t, t / ideal, ideal, fabs(q_act(&r, 1) - q[1]));
+  assert_true(fabs(t / ideal - 2.0) <= 0.05);
+  assert_true(fabs(q_act(&r, 1) - q[1]) < 1e-4);
+  rig_free(&r);
+}
+
+static void test_controller__no_heap_allocation(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  double q[URT_NJ], pose[6];
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = q_act(&r, j);
+  }
+  tcp_actual(&r, pose);
+  long before = urt_test_malloc_count();
+  urt_test_malloc_arm(1);
+  q[0] += 0.1;
+  urt_ctrl_cmd_t c = movej_to(&r, q, 1.4, 1.05);
+  rig_period(&r, &c);
+  run_for(&r, 0.05);
+  pose[2] += 0.02;
+  urt_ctrl_cmd_t l = cmd_of(&r, URT_CTRL_MOVEL);
+  memcpy(l.pose, pose, sizeof pose);
+  l.a = 1.2;
+  l.v = 0.25;
+  rig_period(&r, &l);  // waits for the movej to stop, then the line
+  run_for(&r, 0.2);
+  urt_ctrl_cmd_t s = cmd_of(&r, URT_CTRL_SPEEDL);
+  s.pose[0] = 0.02;
+  s.a = 0.5;
+  rig_period(&r, &s);
+  run_for(&r, 0.05);
+  urt_ctrl_cmd_t sv = cmd_of(&r, URT_CTRL_SERVOJ);
+  memcpy(sv.q, r.c->q1, sizeof sv.q);
+  sv.lookahead_time = 0.1;
+  sv.gain = 300.0;
+  rig_period(&r, &sv);
+  urt_ctrl_cmd_t h = cmd_of(&r, URT_CTRL_HALT);
+  rig_period(&r, &h);
+  run_for(&r, 0.1);
+  urt_snapshot_t snap;
+  urt_snapshot_fill(r.m, r.c, r.d, &snap);
+  urt_test_malloc_arm(0);
+  long calls = urt_test_malloc_count() - before;
+  print_message("heap calls during apply/tick/setpoint/snapshot: %ld\n", calls);
+  assert_int_equal(calls, 0);
+  assert_int_equal(r.d->pstop, 0);
+  rig_free(&r);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_movej__trapezoid_time_and_settling_e_series),
       cmocka_unit_test(test_movej__trapezoid_time_and_settling_cb3),
+      cmocka_unit_test(test_movel__straight_10_cm),
+      cmocka_unit_test(test_servoj__sine_lags_by_lookahead),
+      cmocka_unit_test(test_speedj__moves_by_commanded_amount_then_stopj_to_rest),
+      cmocka_unit_test(test_inverse_kinematics__round_trip),
+      cmocka_unit_test(test_bad_target__protective_stop_then_unlock),
+      cmocka_unit_test(test_state_machine__motion_refused_until_running),
+      cmocka_unit_test(test_speed_slider__half_doubles_movej_time),
+      cmocka_unit_test(test_controller__no_heap_allocation),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
