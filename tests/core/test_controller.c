@@ -567,6 +567,124 @@ static void test_controller__no_heap_allocation(void **state) {
   rig_free(&r);
 }
 
+static void test_snapshot__tcp_force_recovers_applied_wrench(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  urt_snapshot_t s;
+  run_for(&r, 0.1);
+  urt_snapshot_fill(r.m, r.c, r.d, &s);
+  double w0 = 0.0;
+  for (int i = 0; i < 6; i++) {
+    w0 = fmax(w0, fabs(s.tcp_force[i]));
+  }
+  const double w[6] = {10.0, -5.0, 20.0, 1.0, -0.5, 0.8};
+  memcpy(r.d->wrench_ext, w, sizeof w);
+  run_for(&r, 0.5);
+  urt_snapshot_fill(r.m, r.c, r.d, &s);
+  double err = 0.0;
+  for (int i = 0; i < 6; i++) {
+    err = fmax(err, fabs(s.tcp_force[i] - w[i]));
+  }
+  // and while moving (base joint turning)
+  double q[URT_NJ];
+  memcpy(q, r.c->q1, sizeof q);
+  q[0] += 0.6;
+  urt_ctrl_cmd_t c = movej_to(&r, q, 1.4, 1.05);
+  rig_period(&r, &c);
+  run_for(&r, 0.3);
+  urt_snapshot_fill(r.m, r.c, r.d, &s);
+  double err_mv = 0.0;
+  for (int i = 0; i < 6; i++) {
+    err_mv = fmax(err_mv, fabs(s.tcp_force[i] - w[i]));
+  }
+  print_message("tcp_force: %.2e with no wrench; applied [10 -5 20 N, 1 -0.5 0.8 N m]: "
+                "worst error at rest %.2e, moving at %.2f rad/s %.2e\n",
+                w0, err, s.qd[0], err_mv);
+  assert_true(w0 < 1e-2);
+  assert_true(err < 1e-2);
+  assert_true(err_mv < 0.05);
+  rig_free(&r);
+}
+
+static void test_snapshot__fields_follow_the_physics(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  run_for(&r, 0.2);
+  urt_snapshot_t s;
+  memset(&s, 0xff, sizeof s);  // nothing left unwritten
+  urt_snapshot_fill(r.m, r.c, r.d, &s);
+  const double *all = (const double *)&s.time;
+  (void)all;
+  for (int j = 0; j < URT_NJ; j++) {
+    assert_true(isfinite(s.i_target[j]) && isfinite(s.m_target[j]));
+    assert_near(s.q[j], r.d->x[j][URT_X_Q], 1e-4);
+    assert_near(s.q_target[j], s.q[j], 1e-4);
+    assert_int_equal(s.joint_mode[j], URT_JOINT_MODE_RUNNING);
+    assert_true(s.temperature[j] >= 20.0 && s.temperature[j] < 30.0);
+    assert_near(s.i_target[j], s.m_target[j] / (r.m->motor[j].kt * r.m->gear[j].ratio), 1e-12);
+  }
+  // holding the home pose: the shoulder carries no torque (upper arm up), the current is small
+  double g = sqrt(s.tool_accel[0] * s.tool_accel[0] + s.tool_accel[1] * s.tool_accel[1] +
+                  s.tool_accel[2] * s.tool_accel[2]);
+  assert_near(g, 9.81, 0.05);
+  for (int i = 0; i < 6; i++) {
+    assert_near(s.tcp_pose[i], s.tcp_pose_target[i], 1e-3);
+    assert_near(s.tcp_pose[i], r.d->tcp_pose[i], 1e-9);  // model TCP = active TCP here
+  }
+  assert_near(s.v_robot, 48.0, 1e-12);
+  assert_true(isfinite(s.i_robot));
+  assert_int_equal(s.robot_mode, URT_ROBOT_MODE_RUNNING);
+  assert_int_equal(s.safety_status, URT_SAFETY_MODE_NORMAL);
+  assert_near(s.time, 0.2, 1e-9);
+  assert_near(s.sim_time, 0.2, 1e-9);
+  // elbow of the home pose: above the shoulder by the upper arm
+  print_message("home pose: elbow %.4f %.4f %.4f m, tool accel %.3f %.3f %.3f m/s^2, "
+                "i_robot %.3f A, T %.2f C\n",
+                s.elbow_pos[0], s.elbow_pos[1], s.elbow_pos[2], s.tool_accel[0],
+                s.tool_accel[1], s.tool_accel[2], s.i_robot, s.temperature[1]);
+  assert_near(s.elbow_pos[2], 0.089084 + 0.425156, 2e-3);
+  // the elbow holds the level forearm: its winding warms as C dT/dt = R i² (T ≈ T_amb)
+  double i = r.d->x[2][URT_X_I];
+  double rise = r.m->motor[2].r * i * i * 0.2 / r.m->thermal[2].c_th;
+  print_message("elbow winding after 0.2 s at %.2f A: +%.3g K (first-order model %.3g K)\n", i,
+                s.temperature[2] - 25.0, rise);
+  assert_true(s.temperature[2] > 25.0);
+  assert_near(s.temperature[2] - 25.0, rise, 0.2 * rise);
+  rig_free(&r);
+}
+
+static void test_direct__follows_external_setpoints(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  double q0[URT_NJ];
+  memcpy(q0, r.c->q1, sizeof q0);
+  // a smooth external trajectory on the base, streamed as q, qd each period
+  double t = 0.0;
+  for (int k = 0; k < 500; k++) {
+    t += r.c->period;
+    urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_DIRECT);
+    memcpy(c.q, q0, sizeof c.q);
+    double w = M_PI;  // 0.1 (1 − cos) over 1 s
+    c.q[0] += 0.1 * (1.0 - cos(w * t));
+    c.qd[0] = 0.1 * w * sin(w * t);
+    rig_period(&r, &c);
+    assert_true(r.c->motion_done_id >= c.id);
+  }
+  run_for(&r, 0.2);
+  double err = fabs(q_act(&r, 0) - (q0[0] + 0.2));
+  print_message("direct: base to +0.2 rad, error %.2e rad\n", err);
+  assert_int_equal(r.d->pstop, 0);
+  assert_true(err < 1e-4);
+  // a torque feed-forward above the joint's limit is a protective stop
+  urt_ctrl_cmd_t bad = cmd_of(&r, URT_CTRL_DIRECT);
+  memcpy(bad.q, r.c->q1, sizeof bad.q);
+  bad.tau[5] = 1e3;
+  rig_period(&r, &bad);
+  assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_PROTECTIVE_STOP);
+  assert_true(r.d->pstop & URT_PSTOP_TORQUE_LIMIT);
+  rig_free(&r);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_movej__trapezoid_time_and_settling_e_series),
@@ -579,6 +697,9 @@ int main(void) {
       cmocka_unit_test(test_state_machine__motion_refused_until_running),
       cmocka_unit_test(test_speed_slider__half_doubles_movej_time),
       cmocka_unit_test(test_controller__no_heap_allocation),
+      cmocka_unit_test(test_snapshot__tcp_force_recovers_applied_wrench),
+      cmocka_unit_test(test_snapshot__fields_follow_the_physics),
+      cmocka_unit_test(test_direct__follows_external_setpoints),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
