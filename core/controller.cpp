@@ -1073,7 +1073,8 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
       tick_speedl(m, c, p);
       if (c->active.t > 0.0 && c->seg_time >= c->active.t - 1e-12) {
         mark_done(c, c->motion_id);
-        start_stop(c, p, joint_stop_time(c, c->active.a));  // TODO tool-space deceleration
+        double a_rot = c->active.a_rot > 0.0 ? c->active.a_rot : c->active.a;
+        start_stop(c, p, tcp_twist_decel_time(m, c, c->active.a, a_rot));
       }
       break;
     case URT_MOTION_STOP:

@@ -191,9 +191,8 @@ static void test_movel__straight_10_cm(void **state) {
   rig_free(&r);
 }
 
-static void test_servoj__sine_lags_by_lookahead(void **state) {
-  (void)state;
-  rig_t r = rig_new(NULL, 0.002, 1);
+static void servoj_sine(double period) {
+  rig_t r = rig_new(NULL, period, 1);
   const double A = 0.2, w = 2.0 * M_PI * 0.5, la = 0.1;
   double base[URT_NJ];
   for (int j = 0; j < URT_NJ; j++) {
@@ -236,9 +235,9 @@ static void test_servoj__sine_lags_by_lookahead(void **state) {
     }
     lags[j] = best_lag;
   }
-  print_message("servoj 0.5 Hz sine at 500 Hz, lookahead %.2f s, gain 300: lag base %.4f s, "
-                "shoulder %.4f s (bound %.4f s)\n",
-                la, lags[0], lags[1], la + 2 * r.c->period);
+  print_message("servoj 0.5 Hz sine streamed at %.0f Hz, lookahead %.2f s, gain 300: lag base "
+                "%.4f s, shoulder %.4f s (bound %.4f s)\n",
+                1.0 / period, la, lags[0], lags[1], la + 2 * r.c->period);
   assert_true(lags[0] <= la + 2 * r.c->period);
   assert_true(lags[1] <= la + 2 * r.c->period);
   // streaming stops: the arm comes to rest
@@ -247,6 +246,68 @@ static void test_servoj__sine_lags_by_lookahead(void **state) {
   for (int j = 0; j < URT_NJ; j++) {
     assert_true(fabs(r.d->x[j][URT_X_QD]) < 1e-3);
   }
+  rig_free(&r);
+}
+
+static void test_servoj__sine_lags_by_lookahead_e_series(void **state) {
+  (void)state;
+  servoj_sine(0.002);
+}
+
+static void test_servoj__sine_lags_by_lookahead_cb3(void **state) {
+  (void)state;
+  servoj_sine(0.008);
+}
+
+static void test_speedl__tool_moves_by_commanded_amount_then_stopl(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  double p0[6], p1[6];
+  tcp_actual(&r, p0);
+  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SPEEDL);
+  c.pose[0] = 0.05;
+  c.pose[2] = -0.03;
+  c.a = 0.5;
+  rig_period(&r, &c);
+  run_for(&r, 1.0 - r.c->period);
+  tcp_actual(&r, p1);
+  double tr = sqrt(0.05 * 0.05 + 0.03 * 0.03) / 0.5;
+  double ex = 0.05 * (1.0 - 0.5 * tr), ez = -0.03 * (1.0 - 0.5 * tr);
+  double err = fmax(fabs(p1[0] - p0[0] - ex) / fabs(ex), fabs(p1[2] - p0[2] - ez) / fabs(ez));
+  double side = fabs(p1[1] - p0[1]), rot = 0.0;
+  for (int i = 3; i < 6; i++) {
+    rot = fmax(rot, fabs(p1[i] - p0[i]));
+  }
+  urt_ctrl_cmd_t s = cmd_of(&r, URT_CTRL_STOPL);
+  s.a = 1.0;
+  double t_stop = run_until_done(&r, &s, 2.0);
+  run_for(&r, 0.1);
+  double vmax = 0.0;
+  for (int j = 0; j < URT_NJ; j++) {
+    vmax = fmax(vmax, fabs(r.d->x[j][URT_X_QD]));
+  }
+  print_message("speedl 1 s: displacement error %.2f %%, sideways %.3f mm, rotation %.2e rad; "
+                "stopl(1.0) %.3f s, |qd| after %.2e rad/s\n",
+                100.0 * err, 1e3 * side, rot, t_stop, vmax);
+  assert_true(err <= 0.05);
+  assert_true(side < 1e-4);
+  assert_true(vmax < 1e-3);
+  assert_int_equal(r.d->pstop, 0);
+  rig_free(&r);
+}
+
+static void test_movej__time_argument_overrides_a_and_v(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  double q[URT_NJ];
+  memcpy(q, r.c->q1, sizeof q);
+  q[0] += 0.3;
+  q[5] -= 0.6;
+  urt_ctrl_cmd_t c = movej_to(&r, q, 1.4, 1.05);
+  c.t = 2.0;
+  double t = run_until_done(&r, &c, 4.0);
+  print_message("movej t=2 s: took %.4f s\n", t);
+  assert_true(fabs(t - 2.0) <= 0.01);
   rig_free(&r);
 }
 
@@ -690,7 +751,10 @@ int main(void) {
       cmocka_unit_test(test_movej__trapezoid_time_and_settling_e_series),
       cmocka_unit_test(test_movej__trapezoid_time_and_settling_cb3),
       cmocka_unit_test(test_movel__straight_10_cm),
-      cmocka_unit_test(test_servoj__sine_lags_by_lookahead),
+      cmocka_unit_test(test_servoj__sine_lags_by_lookahead_e_series),
+      cmocka_unit_test(test_servoj__sine_lags_by_lookahead_cb3),
+      cmocka_unit_test(test_speedl__tool_moves_by_commanded_amount_then_stopl),
+      cmocka_unit_test(test_movej__time_argument_overrides_a_and_v),
       cmocka_unit_test(test_speedj__moves_by_commanded_amount_then_stopj_to_rest),
       cmocka_unit_test(test_inverse_kinematics__round_trip),
       cmocka_unit_test(test_bad_target__protective_stop_then_unlock),
