@@ -251,8 +251,7 @@ void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const double* q, co
   }
 }
 
-void protective_stop(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d, uint32_t fault,
-                     uint32_t pstop_bits) noexcept {
+void protective_stop(urt_ctrl_t* c, urt_data_t* d, uint32_t fault, uint32_t pstop_bits) noexcept {
   c->fault |= fault;
   c->safety_mode = URT_SAFETY_MODE_PROTECTIVE_STOP;
   finish_motion(c);
@@ -263,7 +262,6 @@ void protective_stop(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d, uint32_
   hold_at(c, vec6(d->cmd.q));
   std::memset(c->tau_model0, 0, sizeof c->tau_model0);
   std::memset(c->tau_model1, 0, sizeof c->tau_model1);
-  (void)m;
 }
 
 void refuse(urt_ctrl_t* c, const urt_ctrl_cmd_t* cmd, uint32_t fault) noexcept {
@@ -828,7 +826,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
     }
     if (bad_target) {
       mark_done(c, cmd->id);
-      protective_stop(m, c, d, URT_CTRL_FAULT_BAD_TARGET, bad_target);
+      protective_stop(c, d, URT_CTRL_FAULT_BAD_TARGET, bad_target);
       return;
     }
     if (kind == URT_CTRL_MOVEL) {
@@ -842,7 +840,6 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
     // accepted: the previous motion is over (aborted or superseded)
     c->fault = 0;
     const bool was_servo = c->motion == URT_MOTION_SERVOJ;
-    const int prev_motion = c->motion;
     uint64_t prev_id = c->motion_id;
     if (c->has_pending) {
       mark_done(c, c->pending.id);
@@ -917,7 +914,6 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       default:
         break;
     }
-    (void)prev_motion;
     store_plan(c, p);
     return;
   }
@@ -1017,7 +1013,7 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
 
   // the physics stopped: follow it
   if (d->pstop && c->safety_mode != URT_SAFETY_MODE_PROTECTIVE_STOP) {
-    protective_stop(m, c, d, URT_CTRL_FAULT_PSTOP, 0);
+    protective_stop(c, d, URT_CTRL_FAULT_PSTOP, 0);
   }
   if (!running(c)) {
     // hold (protective stop: where the physics froze; otherwise where the set-point was)
@@ -1049,7 +1045,7 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
       double s = c->speed_scaling;
       c->traj_time += s * c->period;
       if (!tick_movel(m, c, p, s)) {
-        protective_stop(m, c, d, URT_CTRL_FAULT_IK, URT_PSTOP_POS_LIMIT);
+        protective_stop(c, d, URT_CTRL_FAULT_IK, URT_PSTOP_POS_LIMIT);
         return;
       }
       break;
@@ -1110,7 +1106,7 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
     bad = speed_faults(m, c->qd1);
   }
   if (bad) {
-    protective_stop(m, c, d, URT_CTRL_FAULT_BAD_TARGET, bad);
+    protective_stop(c, d, URT_CTRL_FAULT_BAD_TARGET, bad);
     return;
   }
   model_torque(m, c, c->q1, c->qd1, c->qdd1, c->tau_model1);
@@ -1123,15 +1119,13 @@ void urt_ctrl_setpoint(const urt_model_t* m, const urt_ctrl_t* c, int k, urt_com
   const double T = c->period, dt = m->dt;
   const double u = (k * dt) / T, um = (k * dt + dt / 3.0) / T;
   const double u2 = u * u, u3 = u2 * u;
-  const double h00 = 2 * u3 - 3 * u2 + 1, h10 = u3 - 2 * u2 + u, h01 = -2 * u3 + 3 * u2,
-               h11 = u3 - u2;
+  const double h10 = u3 - 2 * u2 + u, h01 = -2 * u3 + 3 * u2, h11 = u3 - u2;
   const double d00 = 6 * u2 - 6 * u, d10 = 3 * u2 - 4 * u + 1, d01 = -d00, d11 = 3 * u2 - 2 * u;
   const double a00 = 12 * um - 6, a10 = 6 * um - 4, a01 = -a00, a11 = 6 * um - 2;
   const double w = (k * dt + 0.5 * dt) / T;  // feed-forward: linear, at the step's middle
   for (int j = 0; j < URT_NJ; j++) {
     double dq = c->q1[j] - c->q0[j];
     out->q[j] = c->q0[j] + (h10 * T * c->qd0[j] + h01 * dq + h11 * T * c->qd1[j]);
-    (void)h00;
     out->qd[j] = (d00 * c->q0[j] + d10 * T * c->qd0[j] + d01 * c->q1[j] + d11 * T * c->qd1[j]) / T;
     out->qdd[j] =
         (a00 * c->q0[j] + a10 * T * c->qd0[j] + a01 * c->q1[j] + a11 * T * c->qd1[j]) / (T * T);

@@ -674,8 +674,6 @@ static void test_snapshot__fields_follow_the_physics(void **state) {
   urt_snapshot_t s;
   memset(&s, 0xff, sizeof s);  // nothing left unwritten
   urt_snapshot_fill(r.m, r.c, r.d, &s);
-  const double *all = (const double *)&s.time;
-  (void)all;
   for (int j = 0; j < URT_NJ; j++) {
     assert_true(isfinite(s.i_target[j]) && isfinite(s.m_target[j]));
     assert_near(s.q[j], r.d->x[j][URT_X_Q], 1e-4);
