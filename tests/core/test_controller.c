@@ -425,6 +425,43 @@ static void test_inverse_kinematics__round_trip(void **state) {
       far_ok++;
     }
   }
+  // from anywhere (±1.5 rad per joint): the solution is never farther from qnear than the pose's
+  // own q (moved by whole turns toward qnear), i.e. the closest branch is found
+  int farther = 0;
+  double worst_far2 = 0.0;
+  for (int i = 0; i < n; i++) {
+    double q[URT_NJ], qnear[URT_NJ], qik[URT_NJ], pose[6], J[36];
+    for (int j = 0; j < URT_NJ; j++) {
+      q[j] = M_PI * (2.0 * urand(&seed) - 1.0);
+    }
+    urt_arm_jacobian(m, q, J);
+    if (fabs(det6(J)) < 2e-3) {
+      i--;
+      continue;
+    }
+    urt_arm_tcp_pose(m, q, pose);
+    for (int j = 0; j < URT_NJ; j++) {
+      qnear[j] = q[j] + 1.5 * (2.0 * urand(&seed) - 1.0);
+    }
+    assert_int_equal(urt_ctrl_inverse_kinematics(m, pose, qnear, qik), 0);
+    double d_ik = 0.0, d_q = 0.0, p2[6];
+    for (int j = 0; j < URT_NJ; j++) {
+      double qw = q[j] + 2.0 * M_PI * round((qnear[j] - q[j]) / (2.0 * M_PI));
+      d_ik += (qik[j] - qnear[j]) * (qik[j] - qnear[j]);
+      d_q += (qw - qnear[j]) * (qw - qnear[j]);
+    }
+    farther += d_ik > d_q + 1e-9;
+    urt_arm_tcp_pose(m, qik, p2);
+    for (int k = 0; k < 3; k++) {
+      worst_far2 = fmax(worst_far2, fabs(p2[k] - pose[k]));
+    }
+  }
+  print_message("IK from qnear within 1.5 rad: %d/%d farther than the known solution, worst "
+                "position error %.2e m\n",
+                farther, n, worst_far2);
+  assert_int_equal(farther, 0);
+  assert_true(worst_far2 < 1e-9);
+
   double unreachable[6] = {2.0, 0.0, 0.5, 0.0, 0.0, 0.0}, q0[URT_NJ] = {0}, qx[URT_NJ];
   int rc = urt_ctrl_inverse_kinematics(m, unreachable, q0, qx);
   print_message("IK round trip, %d random poses, qnear within 0.05 rad: worst joint error "
