@@ -551,6 +551,45 @@ static void test_bad_target__protective_stop_then_unlock(void **state) {
   rig_free(&r);
 }
 
+static void test_pstop__follows_the_physics(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  double q[URT_NJ];
+  memcpy(q, r.c->q1, sizeof q);
+  q[2] += 0.4;
+  urt_ctrl_cmd_t c = movej_to(&r, q, 1.4, 1.05);
+  rig_period(&r, &c);
+  run_for(&r, 0.2);
+  // something else drives the physics into a protective stop (a bad command)
+  urt_command_t bad;
+  memset(&bad, 0, sizeof bad);
+  memcpy(bad.q, r.c->q1, sizeof bad.q);
+  bad.qdd[1] = 1e4;
+  assert_int_equal(urt_command_set(r.m, r.d, &bad), URT_EPSTOP);
+  rig_period(&r, NULL);
+  assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_PROTECTIVE_STOP);
+  assert_true(r.c->fault & URT_CTRL_FAULT_PSTOP);
+  assert_true(r.c->motion_done_id >= c.id);
+  assert_int_equal(r.c->motion, URT_MOTION_IDLE);
+  run_for(&r, 0.3);
+  assert_true(state_finite(r.d));
+  urt_snapshot_t s;
+  urt_snapshot_fill(r.m, r.c, r.d, &s);
+  assert_int_equal(s.safety_mode, URT_SAFETY_MODE_PROTECTIVE_STOP);
+  assert_true(s.pstop & URT_PSTOP_ACC_LIMIT);
+  urt_ctrl_cmd_t u = cmd_of(&r, URT_CTRL_UNLOCK_PSTOP);
+  rig_period(&r, &u);
+  run_for(&r, 0.2);
+  assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
+  assert_int_equal(r.d->pstop, 0);
+  urt_ctrl_cmd_t c2 = movej_to(&r, q, 1.4, 1.05);
+  run_until_done(&r, &c2, 3.0);
+  run_for(&r, 0.3);
+  print_message("after a physics stop and unlock: movej error %.2e rad\n", fabs(q_act(&r, 2) - q[2]));
+  assert_true(fabs(q_act(&r, 2) - q[2]) < 1e-4);
+  rig_free(&r);
+}
+
 static void test_state_machine__motion_refused_until_running(void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 0);
@@ -793,6 +832,7 @@ int main(void) {
       cmocka_unit_test(test_speedj__moves_by_commanded_amount_then_stopj_to_rest),
       cmocka_unit_test(test_inverse_kinematics__round_trip),
       cmocka_unit_test(test_bad_target__protective_stop_then_unlock),
+      cmocka_unit_test(test_pstop__follows_the_physics),
       cmocka_unit_test(test_state_machine__motion_refused_until_running),
       cmocka_unit_test(test_speed_slider__half_doubles_movej_time),
       cmocka_unit_test(test_controller__no_heap_allocation),
