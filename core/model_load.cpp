@@ -721,11 +721,24 @@ void load_joints(const Field &f, const urt_harmonic_drive_params_t gear[2],
   }
 }
 
+// The thermal section: ambient, and r_th, c_th per drive size (A, B).
+void load_thermal(const Field &f, urt_thermal_params_t th[2]) {
+  Map s = f.map({"t_amb", "A", "B"});
+  double t_amb = s["t_amb"].number(in(-50.0, 100.0));
+  const char *sizes[2] = {"A", "B"};
+  for (int k = 0; k < 2; k++) {
+    Map z = s[sizes[k]].map({"r_th", "c_th"});
+    th[k].t_amb = t_amb;
+    th[k].r_th = z["r_th"].number(in_lo_open(0.0, 1000.0));
+    th[k].c_th = z["c_th"].number(in_lo_open(0.0, 1.0e6));
+  }
+}
+
 void load_model(const Origin &origin, const YAML::Node &root, urt_model_t *m) {
   int root_line = root.Mark().line >= 0 ? root.Mark().line + 1 : 1;
   Field doc(&origin, root, "", root_line);
   Map top = doc.map({"name", "simulation", "supply", "arm", "gear_sizes", "friction_common",
-                     "sensors", "joints"});
+                     "sensors", "thermal", "joints"});
 
   std::string name = top["name"].name(sizeof m->name - 1);
   std::snprintf(m->name, sizeof m->name, "%s", name.c_str());
@@ -747,7 +760,13 @@ void load_model(const Origin &origin, const YAML::Node &root, urt_model_t *m) {
   SensorConfig sc = {};
   load_sensors(top["sensors"], m->dt, &sc);
 
+  urt_thermal_params_t thermal[2] = {};
+  load_thermal(top["thermal"], thermal);
+
   load_joints(top["joints"], gear, fric, sc, v_net, m);
+  for (int j = 0; j < URT_NJ; j++) {
+    m->thermal[j] = thermal[m->joint[j].size == 'A' ? 0 : 1];
+  }
 }
 
 // The whole file, or URT_EIO with the system's reason.

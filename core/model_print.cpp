@@ -429,6 +429,14 @@ void print_joint(Emitter &e, const urt_model_t *m, int j) {
   e.boolean("quantise", s->quantise != 0, "-");
   e.end_map();
 
+  const urt_thermal_params_t *th = &m->thermal[j];
+  e.begin_map("thermal");
+  e.num("t_amb", th->t_amb, "degC");
+  e.num("r_th", th->r_th, "K/W");
+  e.num("c_th", th->c_th, "J/K");
+  e.num("tau", th->r_th * th->c_th, "s", true);
+  e.end_map();
+
   e.end_map();
 }
 

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "test_model.h"
 #include "test_support.h"
 #include "urt/core.h"
 
@@ -475,6 +476,19 @@ static void test_model_load__reports_file_line_when_override_is_fine(void **stat
   free(bad);
 }
 
+static void test_model_load__thermal_by_drive_size(void **state) {
+  (void)state;
+  urt_model_t *m = urt_test_model(NULL);
+  for (int j = 0; j < URT_NJ; j++) {
+    assert_near(m->thermal[j].t_amb, 25.0, 0.0);
+    assert_near(m->thermal[j].r_th, j < 3 ? 1.5 : 3.0, 0.0);
+    assert_near(m->thermal[j].c_th, j < 3 ? 200.0 : 70.0, 0.0);
+  }
+  urt_model_free(m);
+  const char *const set[] = {"thermal.B.c_th=0", NULL};
+  expect_error(ur5_text, set, URT_ECONFIG, ":override: thermal.B.c_th: must be in (0, 1e+06] (got 0)");
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_model_load__loads_ur5_in_si_units),
@@ -498,6 +512,7 @@ int main(void) {
       cmocka_unit_test(test_model_load__accepts_null_err_buffer),
       cmocka_unit_test(test_model_load__truncates_long_message_to_err_sz),
       cmocka_unit_test(test_model_load__rejects_bad_override_value),
+      cmocka_unit_test(test_model_load__thermal_by_drive_size),
       cmocka_unit_test(test_model_load__rejects_override_without_value),
       cmocka_unit_test(test_model_load__rejects_malformed_override_key),
       cmocka_unit_test(test_model_load__rejects_override_index_out_of_range),

@@ -142,6 +142,9 @@ def test_printed_values_are_the_files_values(resolved_json, config):
             assert got["gear"][key] == value, f"gear.{key}"
         for key, value in config["friction_common"].items():
             assert got["friction"][key] == value, f"friction.{key}"
+        for key, value in config["thermal"][j["size"]].items():
+            assert got["thermal"][key] == value, f"thermal.{key}"
+        assert got["thermal"]["t_amb"] == config["thermal"]["t_amb"]
 
 
 def test_config_numbers_read_as_numbers_in_yaml_1_1(config):

@@ -158,6 +158,16 @@ typedef struct urt_ctrl {
   double q0[URT_NJ], qd0[URT_NJ], qdd0[URT_NJ];
   double q1[URT_NJ], qd1[URT_NJ], qdd1[URT_NJ];
   double tau_ff[URT_NJ];      /* external torque feed-forward (DIRECT)             */
+
+  /* added by core/controller.cpp (not in the first contract) */
+  double tau_model0[URT_NJ], tau_model1[URT_NJ]; /* model feed-forward at the period's ends:
+                              * inverse dynamics + friction of the set-point − tau_bias [N m] */
+  double tau_bias[URT_NJ];    /* gravity at the initial pose, which urt_data_init's integrators
+                               * already carry                              [N m]  */
+  double traj_time;           /* time along a planned motion, advanced at speed_scaling [s] */
+  urt_ctrl_cmd_t pending;     /* movej/movel waiting for the arm to stop (has_pending)  */
+  int has_pending;
+  double temperature[URT_NJ]; /* motor winding temperature (thermal model)  [°C]  */
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or
@@ -182,6 +192,16 @@ void urt_ctrl_setpoint(const urt_model_t *m, const urt_ctrl_t *c, int k, urt_com
  * Returns 0, or URT_ERANGE when no solution within 1e-10 m / 1e-10 rad exists. */
 int urt_ctrl_inverse_kinematics(const urt_model_t *m, const double pose[6],
                                 const double qnear[URT_NJ], double q[URT_NJ]);
+
+/* As urt_ctrl_inverse_kinematics, with the TCP at flange · tcp (x y z rx ry rz) instead of the
+ * model's fixed TCP (the controller's runtime set_tcp). Context: RT. */
+int urt_ctrl_inverse_kinematics_tcp(const urt_model_t *m, const double tcp[6],
+                                    const double pose[6], const double qnear[URT_NJ],
+                                    double q[URT_NJ]);
+
+/* TCP pose (base frame, axis-angle) at q with the TCP at flange · tcp. Context: RT. */
+void urt_ctrl_forward_kinematics_tcp(const urt_model_t *m, const double tcp[6],
+                                     const double q[URT_NJ], double pose[6]);
 
 #ifdef __cplusplus
 }

@@ -60,6 +60,14 @@ typedef struct urt_joint_params {
   double torque_max;       /* peak output torque, sets i_max  [N m]   */
 } urt_joint_params_t;
 
+/* First-order thermal model of one joint's motor winding, integrated by the controller
+ * (core/controller.cpp): C dT/dt = R i² − (T − T_amb)/R_th. */
+typedef struct urt_thermal_params {
+  double t_amb;            /* ambient temperature              [°C]    */
+  double r_th;             /* winding-to-ambient resistance    [K/W]   */
+  double c_th;             /* winding and housing heat capacity [J/K]  */
+} urt_thermal_params_t;
+
 typedef struct urt_model {
   /* sizes and timing */
   char name[32];           /* robot model, e.g. "UR5"                  */
@@ -79,6 +87,7 @@ typedef struct urt_model {
   urt_harmonic_drive_params_t gear[URT_NJ];
   urt_friction_params_t friction[URT_NJ];
   urt_sensors_params_t sensors[URT_NJ];
+  urt_thermal_params_t thermal[URT_NJ];
 
   /* initial state */
   double q0[URT_NJ];       /* initial joint positions           [rad]  */

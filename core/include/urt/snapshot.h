@@ -43,7 +43,8 @@ typedef struct urt_snapshot {
   double tcp_force[6];        /* wrench at the TCP estimated from the joint-torque residual [N, N m] */
   double tcp_offset[6];       /* active TCP offset from the flange                         */
   double tool_accel[3];       /* tool accelerometer, tool frame             [m/s²]    */
-  double elbow_pos[3], elbow_vel[3];  /* elbow (frame 3 origin), base frame [m, m/s]    */
+  double elbow_pos[3], elbow_vel[3];  /* elbow joint: origin of DH frame 2 (on the axis of
+                                       * joint 3, the elbow), base frame [m, m/s] */
   double payload_mass, payload_cog[3];
 
   /* power */

@@ -1,0 +1,211 @@
+// SPDX-License-Identifier: Apache-2.0
+// core/snapshot.cpp — urt_snapshot_fill: everything the protocol encoders may know, computed
+// from the physics (urt_data_t) and the controller (urt_ctrl_t) once per controller period.
+//
+// Readings and their sources:
+// - q: the joint encoder (d->q_fb: filter, noise, quantisation); qd: the motor encoder speed
+//   through the gear ratio (d->qdm_fb / τ); qdd: the physics' mean acceleration of the last step.
+// - Targets: the controller's set-point at the end of the period (c->q1, qd1, qdd1);
+//   m_target = inverse dynamics (RNEA) + steady friction of the target + any external
+//   feed-forward; i_target = m_target / (k_t τ).
+// - tau: the gear output torque T_CS; i_control: the PI cascade's current reference.
+// - tcp_force: the wrench at the active TCP from the joint-torque residual,
+//   Jᵀ w = M q̈ + C q̇ + g − (T_CS − T_f), solved with damping near singular poses; it is the
+//   wrench the environment applies (same sign as d->wrench_ext).
+// - elbow: the origin of DH frame 2, on the elbow joint's axis (joint 3 turns about z₂).
+// - tool_accel: specific force (acceleration minus gravity) of the TCP point, tool frame.
+// - v_robot: the 48 V supply; i_robot = Σ V_j i_j / v_robot (power balance of the drives,
+//   regeneration included); v_main: the same bus.
+// - digital_in: 0 (no inputs are modelled). Loop diagnostics (exec_time, overruns, …) are zero
+//   here: the loop writes them after this call.
+#include <cmath>
+#include <cstring>
+
+#include <Eigen/Geometry>
+
+#include "controller_internal.hpp"
+#include "urt/core.h"
+#include "urt/drivers/friction.h"
+#include "urt/snapshot.h"
+
+namespace {
+
+using urt::core::Mat3;
+using urt::core::Mat6;
+using urt::core::Vec3;
+using urt::core::Vec6;
+
+Vec6 vec6(const double* x) { return Eigen::Map<const Vec6>(x); }
+
+void put_pose(const Mat3& R, const Vec3& p, double* pose) {
+  Vec3 r = urt::core::rotvec_from_rotation(R);
+  for (int i = 0; i < 3; i++) {
+    pose[i] = p[i];
+    pose[3 + i] = r[i];
+  }
+}
+
+int32_t joint_mode(int32_t robot_mode) {
+  switch (robot_mode) {
+    case URT_ROBOT_MODE_RUNNING:
+      return URT_JOINT_MODE_RUNNING;
+    case URT_ROBOT_MODE_IDLE:
+    case URT_ROBOT_MODE_POWER_ON:
+      return URT_JOINT_MODE_IDLE;
+    case URT_ROBOT_MODE_BACKDRIVE:
+      return URT_JOINT_MODE_BACKDRIVE;
+    default:
+      return URT_JOINT_MODE_POWER_OFF;
+  }
+}
+
+}  // namespace
+
+extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt_data_t* d,
+                                  urt_snapshot_t* s) {
+  using namespace urt::core;
+  urt_data_update_outputs(m, d);
+
+  s->tick = c->tick;
+  s->period = c->period;
+  s->time = (double)c->tick * c->period;
+  s->sim_time = d->t;
+
+  // joints
+  Vec6 q_true, qd_true;
+  for (int j = 0; j < URT_NJ; j++) {
+    q_true[j] = d->x[j][URT_X_Q];
+    qd_true[j] = d->x[j][URT_X_QD];
+  }
+  Vec6 id_target;
+  rnea(m->arm, vec6(c->q1), vec6(c->qd1), vec6(c->qdd1), id_target);
+  for (int j = 0; j < URT_NJ; j++) {
+    const double ratio = m->gear[j].ratio, kt = m->motor[j].kt;
+    s->q_target[j] = c->q1[j];
+    s->qd_target[j] = c->qd1[j];
+    s->qdd_target[j] = c->qdd1[j];
+    double f = 0.0;
+    if (m->friction[j].enabled && c->qd1[j] != 0.0) {
+      f = urt_friction_g(&m->friction[j], c->qd1[j]) * std::tanh(c->qd1[j] / 2e-3);
+    }
+    s->m_target[j] = id_target[j] + f + c->tau_ff[j];
+    s->i_target[j] = s->m_target[j] / (kt * ratio);
+
+    s->q[j] = d->q_fb[j];
+    s->qd[j] = d->qdm_fb[j] / ratio;
+    s->qdd[j] = d->qdd[j];
+    s->i_actual[j] = d->i_fb[j];
+    s->i_control[j] = d->i_ref[j];
+    s->tau[j] = d->t_cs[j];
+    s->v_actual[j] = d->v_sup[j];
+    s->temperature[j] = c->temperature[j];
+    s->joint_mode[j] = joint_mode(c->robot_mode);
+
+    s->motor_angle[j] = d->x[j][URT_X_QM];
+    s->motor_speed[j] = d->x[j][URT_X_QDM];
+    s->gear_in_torque[j] = d->t_in[j];
+    s->friction_torque[j] = d->t_f[j];
+    s->flex_x[j] = d->x[j][URT_X_XFS];
+    s->flex_y[j] = d->x[j][URT_X_YFS];
+    s->bristle_z[j] = d->x[j][URT_X_Z];
+  }
+
+  // tool: actual (true state) and target, at the active TCP
+  Mat3 R;
+  Vec3 p;
+  Mat6 J;
+  tcp_kinematics(m->arm, c->tcp_offset, q_true, R, p, &J);
+  put_pose(R, p, s->tcp_pose);
+  Eigen::Map<Vec6>{s->tcp_speed} = J * qd_true;
+  {
+    Mat3 Rt;
+    Vec3 pt;
+    Mat6 Jt;
+    tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), Rt, pt, &Jt);
+    put_pose(Rt, pt, s->tcp_pose_target);
+    Eigen::Map<Vec6>{s->tcp_speed_target} = Jt * vec6(c->qd1);
+  }
+
+  // wrench from the joint-torque residual
+  {
+    Vec6 id;
+    rnea(m->arm, q_true, qd_true, vec6(d->qdd), id);
+    Vec6 r;
+    for (int j = 0; j < URT_NJ; j++) {
+      r[j] = id[j] - (d->t_cs[j] - d->t_f[j]);
+    }
+    double w = std::fabs(J.determinant());
+    double lambda = w >= 1e-3 ? 0.0 : 0.05 * std::sqrt(1.0 - (w / 1e-3) * (w / 1e-3));
+    Eigen::Map<Vec6>{s->tcp_force} = dls_solve(J.transpose(), r, lambda);
+  }
+  std::memcpy(s->tcp_offset, c->tcp_offset, sizeof s->tcp_offset);
+
+  // tool accelerometer: (J q̈ + J̇ q̇ − g) in the tool frame, J̇ q̇ by a forward difference
+  {
+    const double h = 1e-6;
+    Mat3 R2;
+    Vec3 p2;
+    Mat6 J2;
+    tcp_kinematics(m->arm, c->tcp_offset, q_true + h * qd_true, R2, p2, &J2);
+    Vec3 a = (J * vec6(d->qdd)).head<3>() + ((J2 - J) * qd_true).head<3>() / h;
+    Vec3 g(m->arm.gravity[0], m->arm.gravity[1], m->arm.gravity[2]);
+    Eigen::Map<Vec3>{s->tool_accel} = R.transpose() * (a - g);
+  }
+
+  // elbow: origin of frame 2, moved by joints 1 and 2 (axes z₀, z₁ through origins 0, 1)
+  {
+    double q[URT_NJ], T[3][16];
+    for (int j = 0; j < URT_NJ; j++) {
+      q[j] = q_true[j];
+    }
+    for (int i = 0; i < 3; i++) {
+      urt_arm_frame(m, q, i, T[i]);
+    }
+    Vec3 pe(T[2][3], T[2][7], T[2][11]);
+    Vec3 v = Vec3::Zero();
+    for (int i = 0; i < 2; i++) {
+      Vec3 z(T[i][2], T[i][6], T[i][10]), o(T[i][3], T[i][7], T[i][11]);
+      v += z.cross(pe - o) * qd_true[i];
+    }
+    for (int k = 0; k < 3; k++) {
+      s->elbow_pos[k] = pe[k];
+      s->elbow_vel[k] = v[k];
+    }
+  }
+  s->payload_mass = c->payload_mass;
+  std::memcpy(s->payload_cog, c->payload_cog, sizeof s->payload_cog);
+
+  // power
+  const double v_bus = m->control[0].v_net;
+  double power = 0.0;
+  for (int j = 0; j < URT_NJ; j++) {
+    power += d->v_sup[j] * d->x[j][URT_X_I];
+  }
+  s->v_main = v_bus;
+  s->v_robot = c->robot_mode == URT_ROBOT_MODE_POWER_OFF ? 0.0 : v_bus;
+  s->i_robot = v_bus > 0.0 ? power / v_bus : 0.0;
+
+  // I/O and modes
+  s->digital_in = 0;
+  s->digital_out = c->digital_out;
+  s->analog_out[0] = c->analog_out[0];
+  s->analog_out[1] = c->analog_out[1];
+  s->robot_mode = c->robot_mode;
+  s->safety_mode = c->safety_mode;
+  s->safety_status = c->safety_mode;
+  s->program_state = c->program_state;
+  s->control_mode = 0;  // POSITION
+  s->pstop = d->pstop;
+  s->ctrl_fault = c->fault;
+  s->speed_slider = c->speed_slider;
+  s->speed_scaling = c->speed_scaling;
+  s->motion = c->motion;
+  s->motion_id = c->motion_id;
+  s->motion_done_id = c->motion_done_id;
+
+  // the loop's own diagnostics: written by the loop after this call
+  s->exec_time = 0.0;
+  s->overruns = 0;
+  s->missed_periods = 0;
+  s->cmd_dropped = 0;
+}
