@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from urtwin_proc import BUILD, Emulator, URTWIN
+from urtwin_proc import BUILD, Emulator, RtReader, URTWIN
 
 lcm = pytest.importorskip("lcm")
 LCM_TYPES = os.path.join(BUILD, "net", "lcm", "python")
@@ -91,28 +91,52 @@ def command(q, qd=None, tau=None):
     return c.encode()
 
 
-def test_lcm_status_every_tick_and_drive_at_its_rate():
+def test_lcm_status_every_tick_equals_30003_and_drive_at_its_rate():
+    """10 s of status at the controller rate, each message equal to the 30003 packet of the
+    same controller time; drive messages at their own 1 kHz."""
     url, prefix = lcm_endpoint()
-    with Emulator("--lcm", "--lcm-url", url, "--lcm-prefix", prefix, "--drive-rate", "1000"):
+    rt_packets = {}
+    with Emulator("--lcm", "--lcm-url", url, "--lcm-prefix", prefix, "--drive-rate", "1000") as emu:
         ls = Listener(url, prefix)
-        time.sleep(2.5)
+        stop = threading.Event()
+
+        def read_rt():
+            with RtReader(emu.host) as rt:
+                while not stop.is_set():
+                    p = rt.read_decoded()
+                    rt_packets[round(p["time"] / 0.002)] = p
+
+        reader = threading.Thread(target=read_rt, daemon=True)
+        reader.start()
+        time.sleep(10.6)
+        stop.set()
+        reader.join(timeout=2)
         ls.close()
-    # the middle 2 s: every tick once, in order, controller time exact
     with ls.lock:
         msgs = [m for t, m in ls.status]
         drive = list(ls.drive)
     t0 = ls.status[0][0]
-    window = [m for t, m in ls.status if t0 + 0.25 <= t < t0 + 2.25]
+    window = [m for t, m in ls.status if t0 + 0.3 <= t < t0 + 10.3]
     ticks = [m.tick for m in msgs]
     gaps = sum(1 for a, b in zip(ticks, ticks[1:]) if b != a + 1)
     span = window[-1].time - window[0].time
-    print(f"\nLCM status: {len(window)} messages in 2 s of wall time (controller time "
-          f"{span:.3f} s), {gaps} gaps, {msgs[-1].ticks_lost} ticks lost; drive: {len(drive)} "
-          f"messages over {drive[-1].time - drive[0].time:.3f} s of physics time")
+    # the same tick on both interfaces carries the same numbers, bit for bit
+    both = [m for m in msgs if m.tick in rt_packets]
+    fields = [("q_actual", "q_actual"), ("q_target", "q_target"), ("qd_actual", "qd_actual"),
+              ("current_actual", "i_actual"), ("current_control", "i_control"),
+              ("tcp_pose_actual", "tool_vector_actual"), ("tcp_force", "tcp_force"),
+              ("voltage_actual", "v_actual"), ("temperature", "motor_temperatures")]
+    differ = sum(1 for m in both for a, b in fields
+                 if list(getattr(m, a)) != list(rt_packets[m.tick][b]))
+    print(f"\nLCM status: {len(window)} messages in 10 s of wall time (controller time "
+          f"{span:.3f} s), {gaps} gaps, {msgs[-1].ticks_lost} ticks lost; {len(both)} ticks also "
+          f"read on 30003, {differ} field differences; drive: {len(drive)} messages over "
+          f"{drive[-1].time - drive[0].time:.3f} s of physics time")
     assert gaps == 0
     assert msgs[-1].ticks_lost == 0
     assert all(m.utime == round(m.tick * 2000) and m.period == 0.002 for m in msgs)
-    assert abs(len(window) - 1000) <= 10
+    assert abs(len(window) - 5000) <= 50  # ± 1 %
+    assert len(both) > 4500 and differ == 0
     seqs = [d.seq for d in drive]
     assert all(b > a for a, b in zip(seqs, seqs[1:]))
     rate = (len(drive) - 1) / (drive[-1].time - drive[0].time)
