@@ -71,9 +71,17 @@ static void test_loop__tick_pacing_follows_wall_time(void **state) {
   clock_gettime(CLOCK_MONOTONIC, &t1);
   urt_loop_stop(l);
   double wall = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
-  print_message("250 ticks at 500 Hz took %.3f s of wall time\n", wall);
+  urt_loop_stats_t st;
+  urt_loop_get_stats(l, &st);
+  print_message("250 ticks at 500 Hz took %.3f s of wall time, %llu overruns\n", wall,
+                (unsigned long long)st.overruns);
   assert_int_equal(gaps, 0);
-  assert_true(wall > 0.45 && wall < 0.8);
+  // simulation never runs ahead of the wall clock by more than the period being computed; when
+  // the machine is too slow to keep up (sanitizers, load), the lateness is counted, not hidden
+  assert_true(wall > 0.5 - 0.002 - 1e-3);
+  if (wall > 0.55) {
+    assert_true(st.overruns > 0);
+  }
   // the arm rests at its initial pose
   urt_loop_read_latest(l, &s);
   for (int j = 0; j < URT_NJ; j++) {
