@@ -25,10 +25,12 @@
 #include "urt/core.h"
 #include "urt/seqlock.h"
 #include "urt/spsc_ring.h"
+#include "urt/thread.h"
 
 #define DRIVE_HISTORY 1024          /* drive samples kept (1 s at 1 kHz)            */
 #define CATCH_UP_LIMIT 50           /* periods behind before the clock is re-anchored */
 #define STACK_PREFAULT (256 * 1024) /* bytes of stack touched before the loop        */
+#define PHYSICS_STACK (1024 * 1024) /* the physics thread's whole stack                */
 
 struct urt_loop {
   const urt_model_t *m;
@@ -449,7 +451,7 @@ int urt_loop_start(urt_loop_t *l) {
     return URT_OK;
   }
   atomic_store(&l->stop, 0);
-  int rc = pthread_create(&l->thread, NULL, physics_main, l);
+  int rc = urt_thread_start(&l->thread, physics_main, l, PHYSICS_STACK);
   if (rc != 0) {
     fprintf(stderr, "urtwin: cannot start the physics thread: %s\n", strerror(rc));
     return URT_EIO;

@@ -2,8 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """tools/bench_ports.py — the running emulator under load, for `make bench`.
 
-Starts build/tools/urtwin (20 kHz physics, tick pacing, e-Series 500 Hz), connects 8 clients to
-port 30003 with build/tools/urt_rtprobe for --seconds (default 60), and reports in one run:
+Starts build/tools/urtwin (20 kHz physics, tick pacing, e-Series 500 Hz) twice — as a plain
+process, then with --rt-priority 80 --lock-memory (SCHED_FIFO + mlockall, when permitted) —
+connects 8 clients to port 30003 with build/tools/urt_rtprobe for --seconds (default 60) each
+time, and reports:
   - the inter-packet period the clients see (p50/p99/p99.9/max over all 8 clients),
   - packets received and gaps in the controller timestamps,
   - physics overruns and missed periods the emulator counted over its whole run,
@@ -34,21 +36,12 @@ def vm_rss_kib(pid):
     return None
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--build", default=os.environ.get("URT_BUILD", str(ROOT / "build")))
-    ap.add_argument("--seconds", type=float, default=60.0)
-    ap.add_argument("--clients", type=int, default=8)
-    ap.add_argument("--host", default="127.0.0.1")
-    ap.add_argument("--port-offset", type=int, default=1000)
-    ap.add_argument("--out", default="build/bench_ports.json")
-    args = ap.parse_args(argv)
-
-    build = Path(args.build)
+def run_once(args, build, extra):
+    """One emulator run under load; returns the result dict or None."""
     emu = subprocess.Popen(
         [str(build / "tools" / "urtwin"), "--config", str(ROOT / "config" / "ur5.yaml"),
          "--bind", args.host, "--port-offset", str(args.port_offset), "--pacing", "tick",
-         "--rate", "20000", "--stats-every", "0"],
+         "--rate", "20000", "--stats-every", "0", *extra],
         stderr=subprocess.PIPE, text=True)
     try:
         port = 30003 + args.port_offset
@@ -65,19 +58,21 @@ def main(argv=None):
             probe = None
         if probe is None:
             print("bench_ports.py: urtwin did not open its ports", file=sys.stderr)
-            return 1
+            return None
         time.sleep(min(5.0, args.seconds / 2))
         rss = vm_rss_kib(emu.pid)
         out, err = probe.communicate(timeout=args.seconds + 30)
         if probe.returncode != 0:
             print(f"bench_ports.py: urt_rtprobe failed: {err}", file=sys.stderr)
-            return 1
+            return None
         seen = json.loads(out)
     finally:
         emu.send_signal(signal.SIGTERM)
         _, emu_err = emu.communicate(timeout=10)
     m = re.search(r"stopped after (\d+) ticks, (\d+) overruns, (\d+) missed periods", emu_err)
-    res = {
+    return {
+        "options": extra,
+        "warnings": [l for l in emu_err.splitlines() if "warning" in l],
         "rt_clients": seen,
         "emulator": {
             "ticks": int(m.group(1)) if m else None,
@@ -85,18 +80,38 @@ def main(argv=None):
             "missed_periods": int(m.group(3)) if m else None,
             "vm_rss_kib": rss,
         },
-        "settings": {"physics_hz": 20000, "controller_hz": 500, "pacing": "tick",
-                     "seconds": args.seconds, "loadavg_end": list(os.getloadavg())},
+        "loadavg_end": list(os.getloadavg()),
     }
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--build", default=os.environ.get("URT_BUILD", str(ROOT / "build")))
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--clients", type=int, default=8)
+    ap.add_argument("--host", default="127.0.0.1")
+    ap.add_argument("--port-offset", type=int, default=1000)
+    ap.add_argument("--out", default="build/bench_ports.json")
+    args = ap.parse_args(argv)
+    build = Path(args.build)
+    runs = {}
+    for name, extra in (("plain", []), ("sched_fifo_mlock", ["--rt-priority", "80", "--lock-memory"])):
+        res = run_once(args, build, extra)
+        if res is None:
+            return 1
+        runs[name] = res
+        seen, e, iv = res["rt_clients"], res["emulator"], res["rt_clients"]["interval_us"]
+        print(f"[{name}] 30003 with {seen['clients']} clients for {args.seconds:.0f} s: "
+              f"{seen['packets']} packets, {seen['timestamp_gaps']} timestamp gaps; inter-packet "
+              f"period p50 {iv['p50']:.0f} us, p99 {iv['p99']:.0f} us, p99.9 {iv['p99_9']:.0f} us, "
+              f"max {iv['max']:.0f} us")
+        print(f"[{name}] urtwin: {e['ticks']} ticks, {e['overruns']} physics overruns, "
+              f"{e['missed_periods']} missed periods; resident {e['vm_rss_kib'] / 1024:.1f} MiB"
+              + "".join(f"; {w}" for w in res["warnings"]))
+    out = {"settings": {"physics_hz": 20000, "controller_hz": 500, "pacing": "tick",
+                        "seconds": args.seconds, "clients": args.clients}, "runs": runs}
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.out).write_text(json.dumps(res, indent=2) + "\n")
-    iv = seen["interval_us"]
-    e = res["emulator"]
-    print(f"30003 with {seen['clients']} clients for {args.seconds:.0f} s: {seen['packets']} packets, "
-          f"{seen['timestamp_gaps']} timestamp gaps; inter-packet period p50 {iv['p50']:.0f} us, "
-          f"p99 {iv['p99']:.0f} us, p99.9 {iv['p99_9']:.0f} us, max {iv['max']:.0f} us")
-    print(f"urtwin: {e['ticks']} ticks, {e['overruns']} physics overruns, {e['missed_periods']} "
-          f"missed periods; resident {e['vm_rss_kib'] / 1024:.1f} MiB")
+    Path(args.out).write_text(json.dumps(out, indent=2) + "\n")
     return 0
 
 

@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "urt/errors.h"
+#include "urt/thread.h"
 #include "urt/net/lcm_sender.h"
 
 #define WAIT_MS 50        /* how often the threads look at the stop flag        */
@@ -370,12 +371,12 @@ int urt_lcm_bridge_start(urt_lcm_bridge_t *b) {
   if (b->lockstep) {
     b->src.grant(b->src.ctx, 1);
   }
-  if (pthread_create(&b->pub_thread, NULL, pub_main, b) != 0) {
+  if (urt_thread_start(&b->pub_thread, pub_main, b, 512 * 1024) != 0) {
     return URT_EIO;
   }
   b->pub_running = 1;
   if (b->sub != NULL) {
-    if (pthread_create(&b->sub_thread, NULL, sub_main, b) != 0) {
+    if (urt_thread_start(&b->sub_thread, sub_main, b, 512 * 1024) != 0) {
       urt_lcm_bridge_stop(b);
       return URT_EIO;
     }

@@ -23,6 +23,7 @@
 #include "urt/net/script_framer.h"
 #include "urt/net/tcp.h"
 #include "urt/net/urscript.h"
+#include "urt/thread.h"
 
 /* What each port does (protocols.md §0.2). */
 typedef enum port_kind {
@@ -49,6 +50,7 @@ static bool port_is_state(int kind) { return !port_is_rt(kind); }
 #define READ_CHUNK 65536
 #define MSG_QUEUE 256       /* robot messages waiting for the I/O thread */
 #define MAX_EVENTS 64
+#define THREAD_STACK (512 * 1024)
 
 /* epoll user data: listeners and the two eventfds are tagged small integers; connections are
  * pointers (always > 4096). */
@@ -504,10 +506,10 @@ int urt_emulator_start(urt_emulator_t *e) {
   }
   atomic_store(&e->stop, 0);
   e->streamed_tick = urt_loop_latest_tick(e->loop);
-  if (pthread_create(&e->io_thread, NULL, io_main, e) != 0) {
+  if (urt_thread_start(&e->io_thread, io_main, e, THREAD_STACK) != 0) {
     return URT_EIO;
   }
-  if (pthread_create(&e->relay_thread, NULL, relay_main, e) != 0) {
+  if (urt_thread_start(&e->relay_thread, relay_main, e, THREAD_STACK) != 0) {
     atomic_store(&e->stop, 1);
     pthread_join(e->io_thread, NULL);
     return URT_EIO;
