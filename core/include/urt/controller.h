@@ -73,7 +73,12 @@ typedef enum urt_ctrl_motion {
   URT_MOTION_SPEEDJ,     /* joint velocity ramp                                  */
   URT_MOTION_SPEEDL,     /* tool velocity ramp, resolved through the Jacobian    */
   URT_MOTION_STOP,       /* decelerating to rest (stopj/stopl, end of servo/speed) */
-  URT_MOTION_DIRECT      /* external joint set-points (LCM command channel)      */
+  URT_MOTION_DIRECT,     /* external joint set-points (LCM command channel)      */
+  URT_MOTION_SERVOL,     /* online servo toward a streamed TCP pose               */
+  URT_MOTION_SERVOC,     /* circular-blend servo toward a TCP pose at tool speed v */
+  URT_MOTION_TORQUE,     /* direct joint-torque control of the drives             */
+  URT_MOTION_FREEDRIVE,  /* teach mode: gravity-compensated, back-drivable arm    */
+  URT_MOTION_FORCE       /* force mode: compliant along selected task-frame axes  */
 } urt_ctrl_motion_t;
 
 /* One command into the controller: a value, never a pointer. */
@@ -100,7 +105,19 @@ typedef enum urt_ctrl_cmd_kind {
   URT_CTRL_BRAKE_RELEASE,
   URT_CTRL_UNLOCK_PSTOP,
   URT_CTRL_PROGRAM_STATE,     /* index = URT_PROGRAM_* (set by the program runner)          */
-  URT_CTRL_HALT               /* stop motion now at a (program stopped): like stopj         */
+  URT_CTRL_HALT,              /* stop motion now at a (program stopped): like stopj         */
+  /* added for the RTDE/dashboard and ur_rtde control issues */
+  URT_CTRL_PAUSE,             /* program paused: planned motion decelerates along its path  */
+  URT_CTRL_RESUME,            /* continue after PAUSE                                       */
+  URT_CTRL_SET_WRENCH,        /* pose[6] = external wrench at the TCP, base frame [N, N m]   */
+  URT_CTRL_SET_GRAVITY,       /* pose[0..2] = gravity vector in the base frame [m/s²]        */
+  URT_CTRL_SERVOL,            /* pose[6], t, lookahead_time, gain (servoj in tool space)      */
+  URT_CTRL_SERVOC,            /* pose[6], a, v, r                                           */
+  URT_CTRL_TORQUE,            /* tau[6] joint torques [N m]; index 1: compensate friction    */
+  URT_CTRL_FREEDRIVE,         /* index 1: enter teach mode (q[6] = 1 for free axes), 0: end  */
+  URT_CTRL_FORCE_MODE,        /* pose = task frame, q = selection (0/1), tau = wrench,
+                                 index = type (1..3), qd = limits (speeds / deviations)      */
+  URT_CTRL_FORCE_MODE_END     /* leave force mode                                           */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
