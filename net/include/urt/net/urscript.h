@@ -21,6 +21,7 @@
 #include <stdint.h>
 
 #include "urt/controller.h"
+#include "urt/net/rtde.h"
 #include "urt/snapshot.h"
 
 #ifdef __cplusplus
@@ -69,7 +70,16 @@ typedef struct urt_script_host {
                             double q[URT_NJ]);
   /* Nullable: TCP pose (with the active TCP offset) of joint positions q; returns 0. */
   int (*forward_kinematics)(void *ctx, const double q[URT_NJ], double pose[6]);
+  /* Nullable: the RTDE register bank (protocols.md §2.5–2.6). read_registers copies all of it
+   * consistently (one client data package is never seen half-applied); write_output_register
+   * sets one output register: kind URT_SCRIPT_REG_INT / _DOUBLE / _BIT. */
+  void (*read_registers)(void *ctx, urt_rtde_registers_t *out);
+  void (*write_output_register)(void *ctx, int kind, int index, double value);
+  /* Nullable: the loaded robot model, for native programs' kinematics and dynamics getters. */
+  const urt_model_t *(*model)(void *ctx);
 } urt_script_host_t;
+
+enum { URT_SCRIPT_REG_INT = 0, URT_SCRIPT_REG_DOUBLE = 1, URT_SCRIPT_REG_BIT = 2 };
 
 typedef struct urt_runner_config {
   int64_t step_budget;   /* interpreter steps allowed between two controller ticks before
