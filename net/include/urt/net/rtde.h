@@ -104,6 +104,9 @@ typedef struct urt_rtde_registers {
   int32_t in_int[URT_RTDE_NREG], out_int[URT_RTDE_NREG];
   double in_double[URT_RTDE_NREG], out_double[URT_RTDE_NREG];
   uint8_t in_bit[URT_RTDE_NBITREG], out_bit[URT_RTDE_NBITREG];  /* 0 or 1 */
+  /* how many client data packages wrote each input int/double register (a watchdog sees a
+   * register refreshed even when the value is the same) */
+  uint32_t in_int_writes[URT_RTDE_NREG], in_double_writes[URT_RTDE_NREG];
 } urt_rtde_registers_t;
 
 /* What clients asked the controller to change since the last take: effects, already folded
