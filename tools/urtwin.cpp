@@ -47,8 +47,9 @@ struct Options {
   double drive_rate = 1000.0;
   int rt_priority = 0;
   bool lock_memory = false;
-  bool remote_control = true;
+  bool local_control = false;
   std::string programs_dir = "programs";
+  std::string serial_number = "20235501783";
   double stats_every = 10.0;    // seconds between loop statistics lines (0: never)
 };
 
@@ -121,6 +122,18 @@ int main(int argc, char** argv) {
   app.add_option("--rt-priority", o.rt_priority, "SCHED_FIFO priority of the physics thread (0: none)")
       ->check(CLI::Range(0, 99))->capture_default_str();
   app.add_flag("--lock-memory", o.lock_memory, "mlockall and prefault the physics thread's stack");
+  app.add_option("--programs-dir", o.programs_dir,
+                 "where dashboard `load` finds programs (URScript text, .urp or .script)")
+      ->capture_default_str();
+  app.add_flag("--local-control", o.local_control,
+               "e-Series: the teach pendant has control (dashboard refuses state changes)");
+  app.add_option("--serial-number", o.serial_number, "digits reported by `get serial number`")
+      ->check([](const std::string& s) {
+        return !s.empty() && s.find_first_not_of("0123456789") == std::string::npos
+                   ? std::string()
+                   : std::string("must be digits");
+      })
+      ->capture_default_str();
   app.add_option("--stats-every", o.stats_every, "seconds between loop statistics lines (0: never)")
       ->capture_default_str();
   try {
@@ -185,6 +198,9 @@ int main(int argc, char** argv) {
   ec.bind = o.bind.c_str();
   ec.port_offset = o.port_offset;
   ec.version = version;
+  ec.programs_dir = o.programs_dir.c_str();
+  ec.local_control = o.local_control;
+  ec.serial_number = o.serial_number.c_str();
   urt_emulator_t* emu = nullptr;
   if (urt_emulator_create(loop, &ec, &emu, err, sizeof err) != 0) {
     std::fprintf(stderr, "urtwin: %s\n", err);
@@ -226,14 +242,13 @@ int main(int argc, char** argv) {
   }
   std::fprintf(stderr,
                "urtwin: %s, controller %d.%d.%d (%s, %.0f Hz), physics %.0f Hz, pacing %s, on %s "
-               "ports %d-%d (offset %d)%s\n",
+               "ports 29999, 30001-30004 (offset %d)%s\n",
                m->name, version.major, version.minor, version.bugfix,
                urt_version_is_eseries(&version) ? "e-Series" : "CB3", 1.0 / lc.period, 1.0 / m->dt,
-               o.pacing.c_str(), o.bind.c_str(), 30001 + o.port_offset, 30003 + o.port_offset,
-               o.port_offset, o.lcm ? ", LCM on" : "");
+               o.pacing.c_str(), o.bind.c_str(), o.port_offset, o.lcm ? ", LCM on" : "");
 
   double since_stats = 0.0;
-  while (!g_stop) {
+  while (!g_stop && !urt_emulator_shutdown_requested(emu)) {
     usleep(100000);
     since_stats += 0.1;
     if (o.stats_every > 0 && since_stats >= o.stats_every) {

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "urt/errors.h"
@@ -60,11 +61,26 @@ urt_tcp_conn_t *urt_tcp_accept(int listen_fd, int port_kind, size_t out_cap) {
 
 size_t urt_tcp_pending(const urt_tcp_conn_t *c) { return c->out_len - c->out_head; }
 
+static int64_t now_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+double urt_tcp_stalled_for(const urt_tcp_conn_t *c) {
+  return urt_tcp_pending(c) == 0 ? 0.0 : (now_ns() - c->last_progress_ns) * 1e-9;
+}
+
+void urt_tcp_set_sndbuf(urt_tcp_conn_t *c, int bytes) {
+  setsockopt(c->fd, SOL_SOCKET, SO_SNDBUF, &bytes, sizeof bytes);
+}
+
 bool urt_tcp_flush(urt_tcp_conn_t *c) {
   while (c->out_head < c->out_len) {
     ssize_t n = send(c->fd, c->out + c->out_head, c->out_len - c->out_head, MSG_NOSIGNAL);
     if (n > 0) {
       c->out_head += (size_t)n;
+      c->last_progress_ns = now_ns();
       continue;
     }
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
@@ -94,6 +110,9 @@ bool urt_tcp_send(urt_tcp_conn_t *c, const void *msg, size_t len) {
   if (c->out_cap - c->out_len < len) {
     c->dropped_msgs++;
     return false;
+  }
+  if (c->out_len == c->out_head) {
+    c->last_progress_ns = now_ns();  // a new backlog starts now
   }
   memcpy(c->out + c->out_len, msg, len);
   c->out_len += len;

@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/include/urt/net/emulator.h — the UR controller's TCP interfaces on top of a running hard
  * loop: primary 30001, secondary 30002, real-time 30003 (and their read-only twins 30011–30013),
- * all served by one I/O thread (the single producer of commands from clients), plus the
- * URScript program runner.
+ * RTDE 30004 and the dashboard 29999, all served by one I/O thread (the single producer of
+ * commands from clients), plus the URScript program runner.
  *
  *   hard loop ──snapshots──▶ I/O thread ──▶ 30003 packets every tick, robot state at 10 Hz
  *   clients ──bytes──▶ script framer ──▶ controller commands (ring) / programs (runner)
@@ -25,6 +25,9 @@ typedef struct urt_emulator_config {
   const char *bind;          /* IPv4 address, default "127.0.0.1"                   */
   int port_offset;           /* added to every port                                  */
   urt_version_t version;     /* the emulated controller                              */
+  const char *programs_dir;  /* where dashboard `load` finds programs; NULL: none       */
+  int local_control;         /* e-Series: 1 = local control (dashboard refuses changes) */
+  const char *serial_number; /* digits; NULL: "20235501783"                            */
 } urt_emulator_config_t;
 
 /* Per-port counters (readable while running, approximately). */
@@ -47,6 +50,9 @@ int urt_emulator_start(urt_emulator_t *e);
 void urt_emulator_stop(urt_emulator_t *e);          /* idempotent; closes every client */
 void urt_emulator_destroy(urt_emulator_t *e);       /* Nullable: e */
 void urt_emulator_get_stats(const urt_emulator_t *e, urt_emulator_stats_t *out);
+
+/* True once a dashboard client sent `shutdown` (the owner then stops everything). */
+int urt_emulator_shutdown_requested(const urt_emulator_t *e);
 
 #ifdef __cplusplus
 }

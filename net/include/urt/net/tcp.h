@@ -29,6 +29,7 @@ typedef struct urt_tcp_conn {
   void *user;               /* per-protocol state (framer, parser, …)              */
   bool want_write;          /* EPOLLOUT is armed                                  */
   bool closing;             /* flush what is queued, then close                    */
+  int64_t last_progress_ns; /* CLOCK_MONOTONIC when output last drained or moved    */
 } urt_tcp_conn_t;
 
 /* Accept one connection (non-blocking, TCP_NODELAY) with an output buffer of out_cap bytes.
@@ -44,6 +45,12 @@ bool urt_tcp_flush(urt_tcp_conn_t *c);
 
 /* Bytes still queued. */
 size_t urt_tcp_pending(const urt_tcp_conn_t *c);
+
+/* Seconds the connection has had output queued without the peer taking any of it. */
+double urt_tcp_stalled_for(const urt_tcp_conn_t *c);
+
+/* Shrink the kernel's send buffer (so that a peer that stops reading shows as stalled soon). */
+void urt_tcp_set_sndbuf(urt_tcp_conn_t *c, int bytes);
 
 /* Close the socket and free the connection (user state is the caller's to free first). */
 void urt_tcp_close(urt_tcp_conn_t *c);

@@ -1,0 +1,121 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/server/emulator_internal.h — what the I/O thread's parts share: the emulator, its
+ * clients, and one set of hooks per kind of port (port_script.c: 30001–30003 and their
+ * read-only twins; port_rtde.c: 30004; port_dashboard.c: 29999). Everything here runs on the
+ * I/O thread unless a comment says otherwise.
+ */
+#ifndef URT_NET_EMULATOR_INTERNAL_H
+#define URT_NET_EMULATOR_INTERNAL_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "urt/net/dashboard.h"
+#include "urt/net/emulator.h"
+#include "urt/net/primary.h"
+#include "urt/net/rtde.h"
+#include "urt/net/tcp.h"
+#include "urt/net/urscript.h"
+
+/* What each port does (protocols.md §0.2). */
+typedef enum port_kind {
+  PORT_PRIMARY = 0,     /* 30001: version, state at 10 Hz, robot messages; takes URScript */
+  PORT_SECONDARY,       /* 30002: version, state at 10 Hz; takes URScript                 */
+  PORT_RT,              /* 30003: a packet every controller tick; takes URScript          */
+  PORT_PRIMARY_RO,      /* 30011 */
+  PORT_SECONDARY_RO,    /* 30012 */
+  PORT_RT_RO,           /* 30013 */
+  PORT_RTDE,            /* 30004 */
+  PORT_DASHBOARD,       /* 29999 */
+  URT__N_PORTS
+} port_kind_t;
+
+#define MSG_QUEUE 256   /* robot messages waiting for the I/O thread */
+
+typedef struct urt__client {
+  urt_tcp_conn_t *conn;
+  void *proto;               /* the port's per-connection state */
+  struct urt__client *next;
+} urt__client_t;
+
+struct urt_emulator {
+  urt_loop_t *loop;
+  const urt_model_t *m;
+  urt_emulator_config_t cfg;
+  char bind[64], programs_dir[1024];
+  int producer;                  /* the I/O thread's command ring */
+  urt_runner_t *runner;
+  int runner_producer;           /* the runner thread's command ring */
+
+  int listen_fd[URT__N_PORTS];
+  int epoll_fd, tick_fd, msg_fd;
+  urt__client_t *clients;
+  uint64_t streamed_tick;        /* last tick handed to the ports */
+
+  /* 30001–30003 */
+  urt_primary_robot_info_t info;
+  uint64_t state_every;          /* ticks between robot-state messages (10 Hz) */
+
+  /* 30004: the register bank is shared with the runner thread, hence the lock */
+  urt_rtde_registry_t rtde_registry;
+  pthread_mutex_t reg_lock;
+  urt_rtde_registers_t regs;
+
+  /* 29999 */
+  urt_dashboard_ctx_t dash_ctx;
+  urt_dashboard_state_t dash;
+  double pstop_since;            /* controller time the protective stop began, < 0: none */
+
+  /* runner → I/O thread */
+  pthread_mutex_t msg_lock;
+  urt_script_msg_t msg_queue[MSG_QUEUE];
+  unsigned msg_head, msg_len;
+  uint64_t msg_dropped;
+
+  pthread_t io_thread, relay_thread;
+  _Atomic int stop;
+  _Atomic int shutdown_requested;  /* the dashboard asked the emulator to shut down */
+  int started;
+
+  _Atomic uint64_t n_clients, rt_packets, rt_dropped, state_messages, ticks_lost, scripts,
+      rtde_packages, rtde_dropped;
+};
+
+/* Hooks of one kind of port. Nullable: every hook. */
+typedef struct urt__port_ops {
+  /* a client connected: set c->proto, queue a greeting; false: refuse (close) it */
+  bool (*open)(urt_emulator_t *e, urt__client_t *c);
+  /* bytes arrived; false: close the connection (after flushing what is queued) */
+  bool (*input)(urt_emulator_t *e, urt__client_t *c, const uint8_t *data, size_t n);
+  /* the peer closed: last chance to act on buffered input */
+  void (*eof)(urt_emulator_t *e, urt__client_t *c);
+  /* free c->proto */
+  void (*close)(urt_emulator_t *e, urt__client_t *c);
+} urt__port_ops_t;
+
+extern const urt__port_ops_t urt__port_script_ops, urt__port_rtde_ops, urt__port_dashboard_ops;
+
+/* Per tick, in order: RTDE inputs into the controller, then what every port streams. */
+void urt__rtde_apply_inputs(urt_emulator_t *e);
+void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s);
+void urt__rtde_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s);
+void urt__dashboard_tick(urt_emulator_t *e, const urt_snapshot_t *s);
+
+/* Robot messages to every primary client (30001, 30011). */
+void urt__script_broadcast(urt_emulator_t *e, const urt_script_msg_t *msg);
+void urt__script_broadcast_text(urt_emulator_t *e, const char *text);
+
+/* A command from the I/O thread into the controller; a full ring is reported as text. */
+void urt__submit(urt_emulator_t *e, const urt_ctrl_cmd_t *cmd);
+void urt__submit_kind(urt_emulator_t *e, int kind);
+
+/* Send one message to every client of the ports for which want(kind) is true. */
+void urt__send_to(urt_emulator_t *e, bool (*want)(int kind), const uint8_t *buf, size_t len,
+                  _Atomic uint64_t *sent, _Atomic uint64_t *dropped);
+
+/* Controller time of the newest snapshot [µs]. */
+uint64_t urt__timestamp_us(const urt_emulator_t *e);
+
+#endif

@@ -1,0 +1,130 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/server/port_dashboard.c — port 29999: the greeting, then one reply line per request
+ * line (urt_dashboard_handle), and the actions that follow a reply: programs on the runner,
+ * robot-mode changes through the controller, quit and shutdown. */
+#define _GNU_SOURCE
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "emulator_internal.h"
+
+// Play the loaded program: its text (URScript) goes to the runner as a main program. The file
+// was resolved under the programs directory by `load`; O_NOFOLLOW closes the window in which
+// it could have been swapped for a link since.
+static void play_program(urt_emulator_t *e) {
+  int fd = open(e->dash.program_path, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+  struct stat st;
+  if (fd < 0 || fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size <= 0 ||
+      st.st_size > (off_t)URT_SCRIPT_MAX_TEXT) {
+    if (fd >= 0) {
+      close(fd);
+    }
+    urt__script_broadcast_text(e, "urtwin: the loaded program cannot be read");
+    return;
+  }
+  char *text = malloc((size_t)st.st_size);
+  ssize_t got = text ? read(fd, text, (size_t)st.st_size) : -1;
+  close(fd);
+  if (got == st.st_size) {
+    urt_runner_submit(e->runner, text, (size_t)got);
+  }
+  free(text);
+}
+
+static void perform(urt_emulator_t *e, urt__client_t *c, const urt_dashboard_action_t *a,
+                    const urt_dashboard_robot_t *robot) {
+  switch (a->program) {
+    case URT_DASHBOARD_PROG_LOAD:
+    case URT_DASHBOARD_PROG_STOP:
+      urt_runner_stop(e->runner);
+      urt__submit_kind(e, URT_CTRL_RESUME);  // a stopped program is no longer paused
+      break;
+    case URT_DASHBOARD_PROG_PLAY:
+      if (robot->program_state == URT_PROGRAM_PAUSED) {
+        urt__submit_kind(e, URT_CTRL_RESUME);
+      } else {
+        play_program(e);
+      }
+      break;
+    case URT_DASHBOARD_PROG_PAUSE:
+      urt__submit_kind(e, URT_CTRL_PAUSE);
+      break;
+    default:
+      break;
+  }
+  for (int i = 0; i < a->n_ctrl; i++) {
+    urt__submit_kind(e, a->ctrl[i]);
+  }
+  if (a->log_text) {
+    char text[512];
+    snprintf(text, sizeof text, "%.*s", (int)a->log_len, a->log_text);
+    urt__script_broadcast_text(e, text);
+  }
+  if (a->session == URT_DASHBOARD_SESSION_QUIT) {
+    c->conn->closing = true;
+  } else if (a->session == URT_DASHBOARD_SESSION_SHUTDOWN) {
+    atomic_store(&e->shutdown_requested, 1);
+  }
+}
+
+static bool dashboard_open(urt_emulator_t *e, urt__client_t *c) {
+  urt_dashboard_framer_t *f = malloc(sizeof *f);
+  if (!f) {
+    return false;
+  }
+  urt_dashboard_framer_init(f);
+  c->proto = f;
+  urt_tcp_send(c->conn, URT_DASHBOARD_GREETING, strlen(URT_DASHBOARD_GREETING));
+  return true;
+}
+
+static bool dashboard_input(urt_emulator_t *e, urt__client_t *c, const uint8_t *data, size_t n) {
+  urt_dashboard_framer_t *f = c->proto;
+  static _Thread_local char reply[URT_DASHBOARD_REPLY_MAX];
+  while (n > 0 && !c->conn->closing) {
+    size_t used = 0;
+    urt_dashboard_line_t line;
+    int have = urt_dashboard_framer_next(f, (const char *)data, n, &used, &line);
+    data += used;
+    n -= used;
+    if (!have) {
+      break;
+    }
+    urt_snapshot_t s;
+    urt_loop_read_latest(e->loop, &s);
+    urt_dashboard_robot_t robot;
+    urt_dashboard_robot_from_snapshot(&s, &robot);
+    robot.pstop_age = e->pstop_since >= 0 ? s.time - e->pstop_since : -1.0;
+    urt_dashboard_action_t action;
+    size_t len = urt_dashboard_handle(&e->dash_ctx, &robot, &e->dash, &line, reply, sizeof reply,
+                                      &action);
+    if (!urt_tcp_send(c->conn, reply, len)) {
+      return false;  // a client that never reads its replies
+    }
+    perform(e, c, &action, &robot);
+  }
+  return true;
+}
+
+static void dashboard_close(urt_emulator_t *e, urt__client_t *c) {
+  free(c->proto);
+  c->proto = NULL;
+}
+
+const urt__port_ops_t urt__port_dashboard_ops = {.open = dashboard_open, .input = dashboard_input,
+                                                 .close = dashboard_close};
+
+// Remember when a protective stop began (the dashboard refuses to unlock it for 5 s).
+void urt__dashboard_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
+  if (s->safety_mode == URT_SAFETY_MODE_PROTECTIVE_STOP) {
+    if (e->pstop_since < 0) {
+      e->pstop_since = s->time;
+    }
+  } else {
+    e->pstop_since = -1.0;
+  }
+}

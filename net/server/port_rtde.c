@@ -1,0 +1,152 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/server/port_rtde.c — port 30004 (RTDE): one urt_rtde_session_t per connection; client
+ * inputs reach the controller (speed slider, digital and analog outputs, external wrench) and
+ * the register bank every tick, and data packages leave at each recipe's frequency. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "emulator_internal.h"
+
+#define DATA_MAX 8192  /* largest data package an output recipe can make [bytes] */
+
+// Queue the session's pending replies on the connection; false when they do not fit (a
+// client that does not read its replies is broken: the caller closes it).
+static bool send_replies(urt__client_t *c) {
+  urt_rtde_session_t *s = c->proto;
+  const uint8_t *p;
+  size_t n = urt_rtde_session_output(s, &p);
+  if (n == 0) {
+    return true;
+  }
+  if (!urt_tcp_send(c->conn, p, n)) {
+    return false;
+  }
+  urt_rtde_session_consume(s, n);
+  return true;
+}
+
+static bool rtde_open(urt_emulator_t *e, urt__client_t *c) {
+  urt_rtde_session_t *s = malloc(sizeof *s);  // ~45 kB: per connection, not on the stack
+  if (!s) {
+    return false;
+  }
+  urt_rtde_session_init(s, &e->rtde_registry, &e->cfg.version);
+  c->proto = s;
+  return true;
+}
+
+static bool rtde_input(urt_emulator_t *e, urt__client_t *c, const uint8_t *data, size_t n) {
+  urt_rtde_session_t *s = c->proto;
+  atomic_fetch_add(&e->rtde_packages, 1);
+  while (n > 0) {
+    long used = urt_rtde_session_feed(s, data, n);
+    if (used < 0 || urt_rtde_session_closed(s)) {
+      return false;  // unrecoverable framing: the real controller drops the connection too
+    }
+    data += used;
+    n -= (size_t)used;
+    if (!send_replies(c)) {
+      return false;
+    }
+    if (used == 0 && n > 0 && urt_rtde_session_output(s, &(const uint8_t *){NULL}) > 0) {
+      return false;  // replies are stuck: the client is not reading them
+    }
+  }
+  // inputs go to the controller now, not at the next tick: one period less of latency
+  urt__rtde_apply_inputs(e);
+  return true;
+}
+
+static void rtde_close(urt_emulator_t *e, urt__client_t *c) {
+  if (c->proto) {
+    urt_rtde_session_fini(c->proto);
+    free(c->proto);
+    c->proto = NULL;
+  }
+}
+
+const urt__port_ops_t urt__port_rtde_ops = {.open = rtde_open, .input = rtde_input,
+                                            .close = rtde_close};
+
+//---- per tick ----
+
+// Set digital outputs first..first+7 from a mask and values.
+static void submit_outputs(urt_emulator_t *e, int first, uint8_t mask, uint8_t values) {
+  for (int b = 0; b < 8; b++) {
+    if (mask >> b & 1) {
+      urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_DIGITAL_OUT, .index = first + b,
+                            .value = (double)(values >> b & 1)};
+      urt__submit(e, &cmd);
+    }
+  }
+}
+
+void urt__rtde_apply_inputs(urt_emulator_t *e) {
+  urt_rtde_inputs_t all, one;
+  bool any = false;
+  for (urt__client_t *c = e->clients; c; c = c->next) {
+    if (c->conn->port_kind != PORT_RTDE || !c->proto) {
+      continue;
+    }
+    // inputs apply without S: ur_rtde's IO interface never starts a stream
+    if (urt_rtde_session_take_inputs(c->proto, &one)) {
+      if (!any) {
+        all = one;
+        any = true;
+      } else {
+        urt_rtde_inputs_merge(&all, &one);
+      }
+    }
+  }
+  if (!any) {
+    return;
+  }
+  pthread_mutex_lock(&e->reg_lock);
+  urt_rtde_inputs_apply_registers(&all, &e->regs);
+  pthread_mutex_unlock(&e->reg_lock);
+  if (all.set & URT_RTDE_IN_SPEED_SLIDER) {
+    urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_SPEED_SLIDER, .value = all.speed_slider_fraction};
+    urt__submit(e, &cmd);
+  }
+  if (all.set & URT_RTDE_IN_EXT_FT) {
+    // the virtual world pushes the tool with this wrench (it is what the physics feels)
+    urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_WRENCH};
+    memcpy(cmd.pose, all.external_force_torque, sizeof cmd.pose);
+    urt__submit(e, &cmd);
+  }
+  submit_outputs(e, 0, all.std_do_mask, all.std_do);
+  submit_outputs(e, 8, all.conf_do_mask, all.conf_do);
+  submit_outputs(e, 16, all.tool_do_mask & 3, all.tool_do);
+  for (int i = 0; i < 2; i++) {
+    if (all.ao_mask >> i & 1) {
+      urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_ANALOG_OUT, .index = i, .value = all.ao[i]};
+      urt__submit(e, &cmd);
+    }
+  }
+}
+
+void urt__rtde_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
+  static _Thread_local urt_rtde_registers_t regs;
+  static _Thread_local uint8_t buf[DATA_MAX];
+  bool have_regs = false;
+  for (urt__client_t *c = e->clients; c; c = c->next) {
+    if (c->conn->port_kind != PORT_RTDE || !c->proto) {
+      continue;
+    }
+    urt_rtde_session_t *ses = c->proto;
+    if (!ses->started) {
+      continue;
+    }
+    if (!have_regs) {
+      pthread_mutex_lock(&e->reg_lock);
+      regs = e->regs;
+      pthread_mutex_unlock(&e->reg_lock);
+      have_regs = true;
+    }
+    send_replies(c);
+    int n = urt_rtde_session_encode_data(ses, s, &regs, buf, sizeof buf);
+    if (n > 0 && !urt_tcp_send(c->conn, buf, (size_t)n)) {
+      atomic_fetch_add(&e->rtde_dropped, 1);
+    }
+  }
+}

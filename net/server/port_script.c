@@ -1,0 +1,149 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/server/port_script.c — ports 30001–30003 and their read-only twins 30011–30013:
+ * the version message on connect, robot state at 10 Hz and robot messages (primary/secondary),
+ * a packet every controller tick (real-time), and URScript input on the writable three. */
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "emulator_internal.h"
+#include "urt/errors.h"
+#include "urt/net/rt_packet.h"
+#include "urt/net/script_framer.h"
+
+static bool takes_script(int kind) { return kind <= PORT_RT; }
+static bool is_rt(int kind) { return kind == PORT_RT || kind == PORT_RT_RO; }
+static bool is_primary(int kind) { return kind == PORT_PRIMARY || kind == PORT_PRIMARY_RO; }
+static bool is_state(int kind) {
+  return kind == PORT_PRIMARY || kind == PORT_SECONDARY || kind == PORT_PRIMARY_RO ||
+         kind == PORT_SECONDARY_RO;
+}
+
+//---- robot messages ----
+
+void urt__script_broadcast(urt_emulator_t *e, const urt_script_msg_t *msg) {
+  uint8_t buf[URT_PRIMARY_MAX_MESSAGE];
+  uint64_t ts = (uint64_t)(msg->time * 1e6 + 0.5);
+  int n = URT_EINVAL;
+  switch (msg->kind) {
+    case URT_SCRIPT_MSG_TEXT:
+      n = urt_primary_encode_text(ts, URT_PRIMARY_SOURCE_CONTROLLER, msg->text, buf, sizeof buf);
+      break;
+    case URT_SCRIPT_MSG_KEY:
+      n = urt_primary_encode_key(ts, URT_PRIMARY_SOURCE_ROBOT_INTERFACE, msg->code, msg->argument,
+                                 msg->title, msg->text, buf, sizeof buf);
+      break;
+    case URT_SCRIPT_MSG_RUNTIME_EXCEPTION:
+      n = urt_primary_encode_runtime_exception(ts, URT_PRIMARY_SOURCE_RT_MACHINE, msg->line,
+                                               msg->column, msg->text, buf, sizeof buf);
+      break;
+    default:
+      break;
+  }
+  if (n > 0) {
+    urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
+  }
+}
+
+// A controller event that is not from a program (e.g. an unreadable unit): a TEXT message.
+void urt__script_broadcast_text(urt_emulator_t *e, const char *text) {
+  urt_script_msg_t msg = {.kind = URT_SCRIPT_MSG_TEXT};
+  msg.time = urt__timestamp_us(e) * 1e-6;
+  snprintf(msg.text, sizeof msg.text, "%s", text);
+  urt__script_broadcast(e, &msg);
+}
+
+//---- streaming ----
+
+void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
+  uint8_t rt[URT_RT_PACKET_MAX];
+  size_t n = urt_rt_packet_encode(&e->cfg.version, s, rt, sizeof rt);
+  if (n > 0) {
+    urt__send_to(e, is_rt, rt, n, &e->rt_packets, &e->rt_dropped);
+  }
+  if (s->tick % e->state_every == 0) {
+    uint8_t state[URT_PRIMARY_MAX_MESSAGE];
+    int m = urt_primary_encode_robot_state(&e->cfg.version, &e->info, s, state, sizeof state);
+    if (m > 0) {
+      urt__send_to(e, is_state, state, (size_t)m, &e->state_messages, NULL);
+    }
+  }
+}
+
+//---- input ----
+
+// One framed unit from a client: a controller command line, a program or a statement.
+static void on_unit(void *ctx, const urt_script_unit_t *u) {
+  urt_emulator_t *e = ctx;
+  atomic_fetch_add(&e->scripts, 1);
+  switch (u->kind) {
+    case URT_SCRIPT_UNIT_COMMAND:
+      switch (u->command) {
+        case URT_SCRIPT_CMD_POWER_ON: urt__submit_kind(e, URT_CTRL_POWER_ON); break;
+        case URT_SCRIPT_CMD_POWER_OFF: urt__submit_kind(e, URT_CTRL_POWER_OFF); break;
+        case URT_SCRIPT_CMD_BRAKE_RELEASE: urt__submit_kind(e, URT_CTRL_BRAKE_RELEASE); break;
+        case URT_SCRIPT_CMD_UNLOCK_PSTOP: urt__submit_kind(e, URT_CTRL_UNLOCK_PSTOP); break;
+        case URT_SCRIPT_CMD_STOP_PROGRAM: urt_runner_stop(e->runner); break;
+        default: break;  // set sim / set real: urtwin is always a simulation
+      }
+      break;
+    case URT_SCRIPT_UNIT_PROGRAM:
+    case URT_SCRIPT_UNIT_SECONDARY:
+    case URT_SCRIPT_UNIT_STATEMENT:
+      if (urt_runner_submit(e->runner, u->text, u->len) != 0) {
+        urt__script_broadcast_text(e, "urtwin: script refused: too large or too many queued");
+      }
+      break;
+    default: {
+      char text[160];
+      snprintf(text, sizeof text, "urtwin: script input dropped: %s",
+               u->error ? u->error : "unreadable");
+      urt__script_broadcast_text(e, text);
+    }
+  }
+}
+
+static bool script_open(urt_emulator_t *e, urt__client_t *c) {
+  int kind = c->conn->port_kind;
+  if (takes_script(kind)) {
+    urt_script_framer_t *f = calloc(1, sizeof *f);
+    if (!f) {
+      return false;
+    }
+    urt_script_framer_init(f);
+    c->proto = f;
+  }
+  if (is_state(kind)) {
+    // the first message on the primary and secondary ports is the version (§4.2)
+    uint8_t buf[256];
+    int n = urt_primary_encode_version(&e->cfg.version, urt__timestamp_us(e), buf, sizeof buf);
+    if (n > 0) {
+      urt_tcp_send(c->conn, buf, (size_t)n);
+    }
+  }
+  return true;
+}
+
+static bool script_input(urt_emulator_t *e, urt__client_t *c, const uint8_t *data, size_t n) {
+  if (c->proto) {  // the read-only twins ignore input, as the real ones do
+    urt_script_framer_feed(c->proto, (const char *)data, n, on_unit, e);
+  }
+  return true;
+}
+
+// a statement without its final newline still counts, as on a real robot
+static void script_eof(urt_emulator_t *e, urt__client_t *c) {
+  if (c->proto) {
+    urt_script_framer_finish(c->proto, on_unit, e);
+  }
+}
+
+static void script_close(urt_emulator_t *e, urt__client_t *c) {
+  if (c->proto) {
+    urt_script_framer_free(c->proto);
+    free(c->proto);
+    c->proto = NULL;
+  }
+}
+
+const urt__port_ops_t urt__port_script_ops = {
+    .open = script_open, .input = script_input, .eof = script_eof, .close = script_close};
