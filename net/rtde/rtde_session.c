@@ -78,6 +78,7 @@ void urt_rtde_inputs_apply_registers(const urt_rtde_inputs_t *in, urt_rtde_regis
   for (int i = 0; i < URT_RTDE_NREG; i++) {
     if (in->int_set >> i & 1) {
       r->in_int[i] = in->int_reg[i];
+      r->in_int_writes[i]++;
     }
     if (in->double_set >> i & 1) {
       r->in_double[i] = in->double_reg[i];

@@ -104,6 +104,9 @@ typedef struct urt_rtde_registers {
   int32_t in_int[URT_RTDE_NREG], out_int[URT_RTDE_NREG];
   double in_double[URT_RTDE_NREG], out_double[URT_RTDE_NREG];
   uint8_t in_bit[URT_RTDE_NBITREG], out_bit[URT_RTDE_NBITREG];  /* 0 or 1 */
+  /* Bumped (wrapping) each time a client data package writes input_int_register_i, even with
+   * the same value: what rtde_set_watchdog watches (a refresh, not a change). */
+  uint32_t in_int_writes[URT_RTDE_NREG];
 } urt_rtde_registers_t;
 
 /* What clients asked the controller to change since the last take: effects, already folded
@@ -131,7 +134,8 @@ typedef struct urt_rtde_inputs {
 /* Fold src (newer) into dst (older), as if both had been applied in order. */
 void urt_rtde_inputs_merge(urt_rtde_inputs_t *dst, const urt_rtde_inputs_t *src);
 
-/* Copy the register part of the inputs into the bank's in_* arrays. */
+/* Copy the register part of the inputs into the bank's in_* arrays; count every int register
+ * write in in_int_writes. */
 void urt_rtde_inputs_apply_registers(const urt_rtde_inputs_t *in, urt_rtde_registers_t *r);
 
 //---- registry: which connection owns which input ----
