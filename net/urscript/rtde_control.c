@@ -308,6 +308,8 @@ typedef struct rc {
   int wd_reg;
   uint32_t wd_count;
 
+  bool in_service;              /* service() runs (a submit retry inside it must not re-enter) */
+
   /* history, one entry per tick */
   uint64_t hist_n;
   double hist_q[HIST][URT_NJ], hist_f[HIST][6];
@@ -624,7 +626,17 @@ static int service_contact(rc *R) {
 
 //---- watchdog and streamed-motion faults ----
 
+static int service_tick(rc *R);
+
 static int service(rc *R) {
+  if (R->in_service) return 0;
+  R->in_service = true;
+  int r = service_tick(R);
+  R->in_service = false;
+  return r;
+}
+
+static int service_tick(rc *R) {
   // rtde_set_watchdog(input_int_register_N, f, "stop"): a refresh within 1/f (one tick of slack)
   if (R->wd_on) {
     uint32_t n = R->reg.in_int_writes[R->wd_reg];

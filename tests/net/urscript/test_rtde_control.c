@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "fake_host.h"
 #include "rtde_control.h"
@@ -577,6 +578,31 @@ static void test_rtde_control_runner__dispatches_and_reports_the_life_cycle(void
   assert_int_equal(F.cmd[st].index, URT_PROGRAM_STOPPED);
 }
 
+static void test_rtde_control_runner__a_new_upload_replaces_the_running_one(void **state) {
+  // no client: both programs wait for commands until replaced or stopped
+  urt_runner_t *r;
+  urt_runner_config_t cfg = {.wait_timeout_ms = 1};
+  F.tick_sleep_us = 50;
+  assert_int_equal(urt_runner_create(&H, &cfg, &r), 0);
+  const char *s = script(0, 0, NULL);
+  assert_int_equal(urt_runner_submit(r, s, strlen(s)), 0);
+  for (int k = 0; k < 5000 && F.n_msg < 2; k++) usleep(1000);
+  assert_int_equal(urt_runner_state(r), URT_PROGRAM_PLAYING);
+  assert_int_equal(urt_runner_submit(r, s, strlen(s)), 0);
+  for (int k = 0; k < 5000 && F.n_msg < 4; k++) usleep(1000);
+  urt_runner_stop(r);
+  assert_true(urt_runner_wait_idle(r, 5000));
+  urt_runner_destroy(r);
+  const char *want[][2] = {{"PROGRAM_XXX_STARTED", "rtde_control"}, {"", "RTDE Control Script Loaded"},
+                           {"PROGRAM_XXX_STOPPED", "rtde_control"}, {"PROGRAM_XXX_STARTED", "rtde_control"},
+                           {"", "RTDE Control Script Loaded"}, {"PROGRAM_XXX_STOPPED", "rtde_control"}};
+  assert_int_equal(F.n_msg, 6);
+  for (int k = 0; k < 6; k++) {
+    assert_string_equal(F.msg[k].title, want[k][0]);
+    assert_non_null(strstr(F.msg[k].text, want[k][1]));
+  }
+}
+
 static void test_rtde_control_runner__watchdog_error_is_a_runtime_exception(void **state) {
   add(P_REGULAR, 35)->d[0] = 25;
   add(P_SILENT, 0);
@@ -642,6 +668,7 @@ int main(void) {
       cmocka_unit_test_setup(test_rtde_control_run__upper_range_offsets, setup),
       cmocka_unit_test_setup(test_rtde_control_run__move_path_async_progress, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__dispatches_and_reports_the_life_cycle, setup),
+      cmocka_unit_test_setup(test_rtde_control_runner__a_new_upload_replaces_the_running_one, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__watchdog_error_is_a_runtime_exception, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__custom_script_function_writes_the_registers, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__register_index_out_of_range_is_an_error, setup),
