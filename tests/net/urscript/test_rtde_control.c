@@ -22,8 +22,20 @@
 /* header, offsets as RTDEControlInterface injects them (the value at the start of the next
  * line), a few process_cmd branches (one pruned to `dummy_op = 1` as version pruning leaves
  * it), the move-path hook, the tag line and the end */
-static const char *script(int off_int, int off_float, const char *path) {
-  static char buf[8192];
+static const char *script_with(int off_int, int off_float, const char *path, bool all) {
+  static char buf[16384];
+  char extra[6144] = "";
+  if (all) {
+    // a branch with a body for every other id of the table (as the 10.x script has)
+    static const int ids[] = {6, 7, 8, 9, 10, 12, 15, 17, 18, 19, 20, 21, 24, 25, 26, 27, 28, 29,
+                              30, 34, 36, 37, 38, 39, 40, 41, 42, 44, 47, 51, 52, 53, 54, 58,
+                              59, 60, 61, 62, 63, 64, 65, 68, 69, 71, 254};
+    size_t n = 0;
+    for (size_t k = 0; k < sizeof ids / sizeof ids[0]; k++) {
+      n += (size_t)snprintf(extra + n, sizeof extra - n, "        elif cmd == %d:\n            x = %d\n",
+                            ids[k], ids[k]);
+    }
+  }
   snprintf(buf, sizeof buf,
            "def rtde_control():\n"
            "# HEADER_BEGIN\n"
@@ -57,6 +69,7 @@ static const char *script(int off_int, int off_float, const char *path) {
            "        elif cmd == 66:\n"
            "              # direct_torque\n"
            "              dummy_op = 1\n"
+           "%s%s"
            "        elif cmd == 67:\n"
            "              mass_matrix = get_mass_matrix()\n"
            "        elif cmd == 70:\n"
@@ -73,8 +86,13 @@ static const char *script(int off_int, int off_float, const char *path) {
            "        textmsg(\"RTDE Control Script Loaded (14.02.2024-12:23)\")\n"
            "# NODE_CONTROL_LOOP_ENDS\n"
            "end\n",
-           off_float, off_int, path ? path : "");
+           off_float, off_int, path ? path : "",
+           all ? "              direct_torque(torque, viscous_scale=v, coulomb_scale=c)\n" : "", extra);
   return buf;
+}
+
+static const char *script(int off_int, int off_float, const char *path) {
+  return script_with(off_int, off_float, path, false);
 }
 
 static void test_rtde_control_recognise__reads_offsets_after_the_comment(void **state) {
@@ -119,7 +137,7 @@ static void test_rtde_control_recognise__refuses_other_programs(void **state) {
   const char *custom = "def my_prog():\n  textmsg(\"RTDE Control Script Loaded (x)\")\nend\n";
   assert_false(urt__rc_recognise(custom, strlen(custom), &rc));
   // ScriptClient.getScript() before the offsets are injected: the robot could not compile it
-  char uninjected[8192];
+  char uninjected[16384];
   snprintf(uninjected, sizeof uninjected, "%s", script(0, 0, NULL));
   char *a = strstr(uninjected, "offset\n0");
   memmove(a + 7, a + 8, strlen(a + 8) + 1);
@@ -178,6 +196,8 @@ static int NQ, QI, PHASE, HOLD, OFF;
 static uint64_t MAX_TICK;
 static int TR_OUT0[MAXT], TR_OUT2[MAXT], NTR;
 static int DONE_TICK[32], SENT_TICK[32];
+static uint64_t FORCE_TICK;   /* from this tick on (0: never) the TCP force is FORCE */
+static double FORCE[6];
 
 static void put(const pkg *p) {
   for (int k = 0; k < 8; k++) {
@@ -189,6 +209,7 @@ static void put(const pkg *p) {
 
 /* RTDEControlInterface::sendCommand, one tick at a time */
 static void client_step(uint64_t tick) {
+  if (FORCE_TICK && tick >= FORCE_TICK) memcpy(F.s.tcp_force, FORCE, sizeof FORCE);
   int out0 = REG.out_int[0 + OFF];
   if (NTR < MAXT) {
     TR_OUT0[NTR] = out0;
@@ -277,6 +298,8 @@ static int setup(void **state) {
   memset(DONE_TICK, 0, sizeof DONE_TICK);
   memset(SENT_TICK, 0, sizeof SENT_TICK);
   MAX_TICK = 5000;
+  FORCE_TICK = 0;
+  memset(FORCE, 0, sizeof FORCE);
   return 0;
 }
 
@@ -553,6 +576,217 @@ static void test_rtde_control_run__move_path_async_progress(void **state) {
   assert_int_equal(seen, 3);
 }
 
+static void test_rtde_control_run__settings_reach_the_controller(void **state) {
+  F.s.payload_cog[2] = 0.05;
+  pkg *p = add(P_REGULAR, 29);  // setTcp
+  p->d[2] = 0.1;
+  p = add(P_REGULAR, 17);  // setPayload, CoG 0: keep the current one
+  p->d[0] = 1.5;
+  p = add(P_REGULAR, 59);  // setGravity: UR's direction (up)
+  p->d[2] = 9.82;
+  add(P_REGULAR, 18);  // teachMode
+  add(P_REGULAR, 19);  // endTeachMode
+  p = add(P_REGULAR, 52);  // freedriveMode, axes 1 and 3 free
+  p->i[1] = 1;
+  p->i[3] = 1;
+  p = add(P_CONT, 66);  // directTorque
+  p->hold = 3;
+  p->d[1] = 12.5;
+  add(P_STOP, 255);
+  us_err e;
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+
+  int k = fake_find_cmd(&F, URT_CTRL_SET_TCP, 0);
+  assert_true(k >= 0);
+  assert_float_equal(F.cmd[k].pose[2], 0.1, 0);
+  k = fake_find_cmd(&F, URT_CTRL_SET_PAYLOAD, 0);
+  assert_true(k >= 0);
+  assert_float_equal(F.cmd[k].value, 1.5, 0);
+  assert_float_equal(F.cmd[k].pose[2], 0.05, 0);
+  k = fake_find_cmd(&F, URT_CTRL_SET_GRAVITY, 0);
+  assert_true(k >= 0);
+  assert_float_equal(F.cmd[k].pose[2], -9.82, 0);  // the gravity vector points down
+  k = fake_find_cmd(&F, URT_CTRL_FREEDRIVE, 0);
+  assert_int_equal(F.cmd[k].index, 1);
+  for (int j = 0; j < 6; j++) assert_float_equal(F.cmd[k].q[j], 1, 0);
+  k = fake_find_cmd(&F, URT_CTRL_FREEDRIVE, k + 1);
+  assert_int_equal(F.cmd[k].index, 0);
+  k = fake_find_cmd(&F, URT_CTRL_FREEDRIVE, k + 1);
+  assert_int_equal(F.cmd[k].index, 1);
+  assert_float_equal(F.cmd[k].q[0], 1, 0);  // i1..i6: the axes
+  assert_float_equal(F.cmd[k].q[1], 0, 0);
+  assert_float_equal(F.cmd[k].q[2], 1, 0);
+  k = fake_find_cmd(&F, URT_CTRL_TORQUE, 0);
+  assert_true(k >= 0);
+  assert_float_equal(F.cmd[k].tau[1], 12.5, 0);
+  assert_int_equal(fake_find_cmd(&F, URT_CTRL_TORQUE, k + 1), -1);  // one per distinct torque
+}
+
+static void test_rtde_control_run__getters_answer_in_the_output_registers(void **state) {
+  double q[6] = {0.2, -1.4, 1.5, -1.7, -1.5, 0.3};
+  memcpy(F.s.q, q, sizeof q);
+  for (int j = 0; j < 6; j++) F.s.tau[j] = j + 0.5;
+  add(P_CONT, 38)->hold = 1;  // getJointTorques
+  add(P_STOP, 255);
+  us_err e;
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  for (int j = 0; j < 6; j++) assert_float_equal(REG.out_double[j], j + 0.5, 0);
+
+  setup(state);
+  add(P_CONT, 26)->hold = 1;  // getStepTime
+  add(P_STOP, 255);
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  assert_float_equal(REG.out_double[0], 0.002, 0);
+
+  setup(state);
+  pkg *p = add(P_REGULAR, 39);  // poseTrans: p[1,0,0, 0,0,π/2] ∘ p[1,0,0, 0,0,0] = p[1,1,0, 0,0,π/2]
+  p->d[0] = 1;
+  p->d[5] = M_PI / 2;
+  p->d[6] = 1;
+  add(P_STOP, 255);
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  assert_float_equal(REG.out_double[0], 1, 1e-12);
+  assert_float_equal(REG.out_double[1], 1, 1e-12);
+  assert_float_equal(REG.out_double[5], M_PI / 2, 1e-12);
+
+  setup(state);
+  p = add(P_REGULAR, 37);  // isJointsWithinSafetyLimits: beyond the first joint's limit
+  p->d[0] = M->joint[0].q_max + 0.1;
+  add(P_STOP, 255);
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  assert_int_equal(REG.out_int[1], 0);
+
+  setup(state);
+  memcpy(F.s.q, q, sizeof q);
+  p = add(P_REGULAR, 37);
+  memcpy(p->d, q, sizeof q);
+  add(P_STOP, 255);
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  assert_int_equal(REG.out_int[1], 1);
+
+  setup(state);
+  add(P_REGULAR, 47);  // isSteady: at rest
+  add(P_STOP, 255);
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  assert_int_equal(REG.out_int[1], 1);
+}
+
+static void test_rtde_control_run__speedj_then_speed_stop(void **state) {
+  F.motion_ticks = 5;
+  pkg *p = add(P_CONT, 9);
+  p->hold = 10;
+  p->d[0] = 0.2;
+  p->d[6] = 0.5;  // a
+  p = add(P_REGULAR, 15);  // speedStop
+  p->d[0] = 2.0;
+  add(P_STOP, 255);
+  us_err e;
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  int k = fake_find_cmd(&F, URT_CTRL_SPEEDJ, 0);
+  assert_true(k >= 0);
+  assert_float_equal(F.cmd[k].q[0], 0.2, 0);
+  assert_float_equal(F.cmd[k].a, 0.5, 0);
+  assert_float_equal(F.cmd[k].t, 0, 0);  // the script's speed thread keeps it going
+  assert_int_equal(fake_find_cmd(&F, URT_CTRL_SPEEDJ, k + 1), -1);
+  int st = fake_find_cmd(&F, URT_CTRL_STOPJ, k);  // after speedj: stopj
+  assert_true(st > k);
+  assert_float_equal(F.cmd[st].a, 2.0, 0);
+}
+
+static void test_rtde_control_run__stops_follow_the_script(void **state) {
+  F.motion_ticks = 30;
+  pkg *p = add(P_REGULAR, 33);  // stopL sync before any async stop: the script's stop_type 0 → stopj
+  p->d[0] = 1.5;
+  p = add(P_REGULAR, 34);  // stopJ async: always stopl
+  p->d[0] = 2.5;
+  p->i[1] = 1;
+  add(P_CONT, 0)->hold = 60;
+  p = add(P_REGULAR, 33);  // now sync stops follow stop_type 1 → stopl
+  p->d[0] = 3.5;
+  add(P_STOP, 255);
+  us_err e;
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  int a = fake_find_cmd(&F, URT_CTRL_STOPJ, 0);
+  assert_true(a >= 0);
+  assert_float_equal(F.cmd[a].a, 1.5, 0);
+  int b = fake_find_cmd(&F, URT_CTRL_STOPL, a);
+  assert_float_equal(F.cmd[b].a, 2.5, 0);
+  int c = fake_find_cmd(&F, URT_CTRL_STOPL, b + 1);
+  assert_float_equal(F.cmd[c].a, 3.5, 0);
+  assert_true(DONE_TICK[1] - SENT_TICK[1] < 30);  // async: done before the stop ended
+  assert_true(DONE_TICK[3] - SENT_TICK[3] >= 30);
+}
+
+static void test_rtde_control_run__force_mode_and_damping(void **state) {
+  pkg *p = add(P_CONT, 6);
+  p->hold = 5;
+  p->i[1] = 2;  // type
+  p->i[4] = 1;  // z selected
+  p->d[8] = -10;  // wrench z
+  p->d[14] = 0.1;  // limit z
+  p = add(P_REGULAR, 20);  // setDamping
+  p->d[0] = 0.3;
+  add(P_REGULAR, 7);  // forceModeStop
+  add(P_STOP, 255);
+  us_err e;
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  int k = fake_find_cmd(&F, URT_CTRL_FORCE_MODE, 0);
+  assert_true(k >= 0);
+  assert_int_equal(F.cmd[k].index, 2);
+  assert_float_equal(F.cmd[k].q[2], 1, 0);
+  assert_float_equal(F.cmd[k].tau[2], -10, 0);
+  assert_float_equal(F.cmd[k].qd[2], 0.1, 0);
+  assert_float_equal(F.cmd[k].value, 0.025, 0);  // the script's default damping
+  assert_float_equal(F.cmd[k].gain, 0.5, 0);     // and gain scaling
+  int d = fake_find_cmd(&F, URT_CTRL_FORCE_MODE, k + 1);
+  assert_true(d > k);
+  assert_float_equal(F.cmd[d].value, 0.3, 0);
+  int end = fake_find_cmd(&F, URT_CTRL_FORCE_MODE_END, d);
+  assert_true(end > d);
+  int st = fake_find_cmd(&F, URT_CTRL_STOPL, end);
+  assert_float_equal(F.cmd[st].a, 10, 0);
+}
+
+static void test_rtde_control_run__move_until_contact(void **state) {
+  F.motion_ticks = 3;
+  FORCE_TICK = 40;
+  FORCE[2] = 25;  // resisting a motion along −z
+  pkg *p = add(P_REGULAR, 51);
+  p->d[2] = -0.05;  // xd
+  p->d[8] = -1;     // direction
+  p->d[12] = 0.5;   // a
+  add(P_STOP, 255);
+  us_err e;
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  int sp = fake_find_cmd(&F, URT_CTRL_SPEEDL, 0);
+  assert_true(sp >= 0);
+  assert_float_equal(F.cmd[sp].pose[2], -0.05, 0);
+  int st = fake_find_cmd(&F, URT_CTRL_STOPL, sp);
+  assert_true(st > sp);
+  assert_float_equal(F.cmd[st].a, 3, 0);
+  int mv = fake_find_cmd(&F, URT_CTRL_MOVEL, st);
+  assert_true(mv > st);
+  assert_true(DONE_TICK[0] >= 40);
+}
+
+static void test_rtde_control_run__contact_detection_runs_the_internal_command(void **state) {
+  F.motion_ticks = 3;
+  FORCE_TICK = 30;
+  FORCE[0] = -20;  // resisting a motion along +x
+  pkg *p = add(P_REGULAR, 62);  // startContactDetection along +x
+  p->d[0] = 1;
+  add(P_CONT, 0)->hold = 40;
+  add(P_REGULAR, 64);  // readContactDetection
+  add(P_STOP, 255);
+  us_err e;
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  assert_true(has_text("cmd == 254 - contact detected"));
+  int st = fake_find_cmd(&F, URT_CTRL_STOPL, 0);
+  assert_true(st >= 0);
+  assert_true(fake_find_cmd(&F, URT_CTRL_MOVEL, st) > st);
+  assert_int_equal(REG.out_int[1], 1);  // steps back: the force appeared at once
+}
+
 //---- the runner ----
 
 static void test_rtde_control_runner__dispatches_and_reports_the_life_cycle(void **state) {
@@ -667,6 +901,13 @@ int main(void) {
       cmocka_unit_test_setup(test_rtde_control_run__ids_the_script_lacks_do_nothing_and_answer_done, setup),
       cmocka_unit_test_setup(test_rtde_control_run__upper_range_offsets, setup),
       cmocka_unit_test_setup(test_rtde_control_run__move_path_async_progress, setup),
+      cmocka_unit_test_setup(test_rtde_control_run__settings_reach_the_controller, setup),
+      cmocka_unit_test_setup(test_rtde_control_run__getters_answer_in_the_output_registers, setup),
+      cmocka_unit_test_setup(test_rtde_control_run__speedj_then_speed_stop, setup),
+      cmocka_unit_test_setup(test_rtde_control_run__stops_follow_the_script, setup),
+      cmocka_unit_test_setup(test_rtde_control_run__force_mode_and_damping, setup),
+      cmocka_unit_test_setup(test_rtde_control_run__move_until_contact, setup),
+      cmocka_unit_test_setup(test_rtde_control_run__contact_detection_runs_the_internal_command, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__dispatches_and_reports_the_life_cycle, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__a_new_upload_replaces_the_running_one, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__watchdog_error_is_a_runtime_exception, setup),
