@@ -90,6 +90,21 @@ static int parse_offset(const char *s, size_t len, const char *name) {
   return -1;
 }
 
+/* a number in [k, e) (the text need not be NUL-terminated): true, *v and *next after it */
+static bool num_at(const char *s, size_t k, size_t e, double *v, size_t *next) {
+  char buf[64];
+  size_t n = 0;
+  while (k + n < e && n + 1 < sizeof buf) {
+    buf[n] = s[k + n];
+    n++;
+  }
+  buf[n] = 0;
+  char *end;
+  *v = strtod(buf, &end);
+  *next = k + (size_t)(end - buf);
+  return end != buf && isfinite(*v);
+}
+
 /* `[n, n, n, n, n, n]` after an optional `p`; returns the index after `]` or 0 */
 static size_t parse_vec6(const char *s, size_t k, size_t e, double x[6], bool *is_pose) {
   *is_pose = false;
@@ -101,11 +116,9 @@ static size_t parse_vec6(const char *s, size_t k, size_t e, double x[6], bool *i
   if (k >= e || s[k] != '[') return 0;
   k++;
   for (int j = 0; j < 6; j++) {
-    char *end;
     k = skip_blank(s, e, k);
-    x[j] = strtod(s + k, &end);
-    if (end == s + k || (size_t)(end - s) > e || !isfinite(x[j])) return 0;
-    k = skip_blank(s, e, (size_t)(end - s));
+    if (!num_at(s, k, e, &x[j], &k)) return 0;
+    k = skip_blank(s, e, k);
     if (k >= e || s[k] != (j == 5 ? ']' : ',')) return 0;
     k++;
   }
@@ -135,14 +148,12 @@ static bool parse_move(const char *s, size_t k, size_t e, urt__rc_move *m) {
     k = skip_blank(s, e, k + 1);
     if (k + 2 > e || s[k + 1] != '=') return false;
     char key = s[k];
-    char *end;
-    double v = strtod(s + k + 2, &end);
-    if (end == s + k + 2 || (size_t)(end - s) > e || !isfinite(v)) return false;
+    double v;
+    if (!num_at(s, k + 2, e, &v, &k)) return false;
     if (key == 'a') m->a = v;
     else if (key == 'v') m->v = v;
     else if (key == 'r') m->r = v;
     else return false;
-    k = (size_t)(end - s);
   }
 }
 
