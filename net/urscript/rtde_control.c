@@ -715,7 +715,6 @@ static int cmd_move(rc *R, int cmd) {
     } else {
       memcpy(c.q, x, sizeof c.q);
     }
-    if (fk(R, c.q, R->waypoint) != 0) return -1;
   } else {
     c.kind = URT_CTRL_MOVEL;
     if (cmd == 4) {
@@ -723,14 +722,21 @@ static int cmd_move(rc *R, int cmd) {
     } else {
       memcpy(c.pose, x, sizeof c.pose);
     }
-    memcpy(R->waypoint, c.pose, sizeof c.pose);
   }
+
+  // get_target_waypoint() answers this target while the move runs (a joint target as its pose)
+  R->have_waypoint = c.kind == URT_CTRL_MOVEL || R->host->forward_kinematics;
+  if (c.kind == URT_CTRL_MOVEL) {
+    memcpy(R->waypoint, c.pose, sizeof c.pose);
+  } else if (R->have_waypoint && fk(R, c.q, R->waypoint) != 0) {
+    return -1;
+  }
+  R->waypoint_id = *R->h->motion_id + 1;  // the id submit_motion gives it
+
   end_streams(R);
   if (stop_async_move(R) != 0) return -1;
   if (!async) return move_wait(R, &c, what);
   if (submit_motion(R, &c) != 0) return -1;
-  R->have_waypoint = true;
-  R->waypoint_id = c.id;
   return async_start(R, ASYNC_MOVE, c.id);
 }
 

@@ -27,7 +27,7 @@ static const char *script_with(int off_int, int off_float, const char *path, boo
   char extra[6144] = "";
   if (all) {
     // a branch with a body for every other id of the table (as the 10.x script has)
-    static const int ids[] = {6, 7, 8, 9, 10, 12, 15, 17, 18, 19, 20, 21, 24, 25, 26, 27, 28, 29,
+    static const int ids[] = {2, 3, 4, 6, 7, 8, 9, 10, 12, 15, 17, 18, 19, 20, 21, 24, 25, 26, 27, 28, 29,
                               30, 34, 36, 37, 38, 39, 40, 41, 42, 44, 47, 51, 52, 53, 54, 58,
                               59, 60, 61, 62, 63, 64, 65, 68, 69, 71, 254};
     size_t n = 0;
@@ -787,6 +787,39 @@ static void test_rtde_control_run__contact_detection_runs_the_internal_command(v
   assert_int_equal(REG.out_int[1], 1);  // steps back: the force appeared at once
 }
 
+static void test_rtde_control_run__target_waypoint_and_history(void **state) {
+  F.motion_ticks = 200;
+  F.s.tcp_pose_target[0] = 0.7;
+  pkg *p = add(P_REGULAR, 3);  // moveL async
+  double pose[6] = {0.3, -0.4, 0.5, 0, 3.1, 0};
+  memcpy(p->d, pose, sizeof pose);
+  p->d[6] = 0.25;
+  p->d[7] = 1.2;
+  p->i[1] = 1;
+  add(P_REGULAR, 28);  // getTargetWaypoint while it moves
+  add(P_STOP, 255);
+  us_err e;
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  for (int j = 0; j < 6; j++) assert_float_equal(REG.out_double[j], pose[j], 0);
+
+  setup(state);
+  F.s.tcp_pose_target[0] = 0.7;
+  add(P_REGULAR, 28);  // at rest: the target TCP pose
+  p = add(P_CONT, 27);  // getActualJointPositionsHistory(0)
+  p->hold = 1;
+  add(P_STOP, 255);
+  F.s.q[4] = -1.25;
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  assert_float_equal(REG.out_double[4], -1.25, 0);
+
+  setup(state);
+  F.s.tcp_pose_target[0] = 0.7;
+  add(P_REGULAR, 28);
+  add(P_STOP, 255);
+  assert_int_equal(run(script_with(0, 0, NULL, true), &e), 0);
+  assert_float_equal(REG.out_double[0], 0.7, 0);
+}
+
 //---- the runner ----
 
 static void test_rtde_control_runner__dispatches_and_reports_the_life_cycle(void **state) {
@@ -908,6 +941,7 @@ int main(void) {
       cmocka_unit_test_setup(test_rtde_control_run__force_mode_and_damping, setup),
       cmocka_unit_test_setup(test_rtde_control_run__move_until_contact, setup),
       cmocka_unit_test_setup(test_rtde_control_run__contact_detection_runs_the_internal_command, setup),
+      cmocka_unit_test_setup(test_rtde_control_run__target_waypoint_and_history, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__dispatches_and_reports_the_life_cycle, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__a_new_upload_replaces_the_running_one, setup),
       cmocka_unit_test_setup(test_rtde_control_runner__watchdog_error_is_a_runtime_exception, setup),
