@@ -122,6 +122,11 @@ typedef struct us_hooks {
  * thread (calls the host's blocking wait_tick). */
 int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err);
 
+/* Pose algebra shared with the native programs: axis-angle → row-major rotation matrix, and
+ * pose_trans(p_from, p_from_to) = p_from ∘ p_from_to. */
+void urt__us_rotvec_to_mat(const double r[3], double R[9]);
+void urt__us_pose_trans(const double p_from[6], const double p_from_to[6], double out[6]);
+
 /* Format an error as the RUNTIME_EXCEPTION (or KEY for secondary programs) message. */
 void urt__us_err_msg(const us_err *e, bool secondary, urt_script_msg_t *msg);
 

@@ -1317,7 +1317,7 @@ static int b_get_list_length(vm *V, const us_node *n, sv *a, sv *out) {
 }
 
 /* axis-angle ↔ rotation matrix for the pose functions */
-static void rotvec_to_mat(const double r[3], double R[9]) {
+void urt__us_rotvec_to_mat(const double r[3], double R[9]) {
   double th = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
   if (th < 1e-12) {
     double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
@@ -1368,16 +1368,20 @@ static int pose_args(vm *V, const us_node *n, sv *a, int k) {
   return X_OK;
 }
 
-/* pose_trans(p_from, p_from_to) = p_from ∘ p_from_to */
-static int b_pose_trans(vm *V, const us_node *n, sv *a, sv *out) {
-  if (pose_args(V, n, a, 0) != X_OK || pose_args(V, n, a, 1) != X_OK) return X_ERR;
-  const double *p = a[0].u.p, *q = a[1].u.p;
-  double Rp[9], Rq[9], R[9], o[6];
-  rotvec_to_mat(p + 3, Rp);
-  rotvec_to_mat(q + 3, Rq);
+void urt__us_pose_trans(const double p[6], const double q[6], double o[6]) {
+  double Rp[9], Rq[9], R[9];
+  urt__us_rotvec_to_mat(p + 3, Rp);
+  urt__us_rotvec_to_mat(q + 3, Rq);
   mat_mul(Rp, Rq, R);
   for (int i = 0; i < 3; i++) o[i] = p[i] + Rp[3 * i] * q[0] + Rp[3 * i + 1] * q[1] + Rp[3 * i + 2] * q[2];
   mat_to_rotvec(R, o + 3);
+}
+
+/* pose_trans(p_from, p_from_to) = p_from ∘ p_from_to */
+static int b_pose_trans(vm *V, const us_node *n, sv *a, sv *out) {
+  if (pose_args(V, n, a, 0) != X_OK || pose_args(V, n, a, 1) != X_OK) return X_ERR;
+  double o[6];
+  urt__us_pose_trans(a[0].u.p, a[1].u.p, o);
   *out = mk_pose(o);
   return X_OK;
 }
@@ -1387,8 +1391,8 @@ static int b_pose_add(vm *V, const us_node *n, sv *a, sv *out) {
   if (pose_args(V, n, a, 0) != X_OK || pose_args(V, n, a, 1) != X_OK) return X_ERR;
   const double *p = a[0].u.p, *q = a[1].u.p;
   double Rp[9], Rq[9], R[9], o[6];
-  rotvec_to_mat(p + 3, Rp);
-  rotvec_to_mat(q + 3, Rq);
+  urt__us_rotvec_to_mat(p + 3, Rp);
+  urt__us_rotvec_to_mat(q + 3, Rq);
   mat_mul(Rq, Rp, R);
   for (int i = 0; i < 3; i++) o[i] = p[i] + q[i];
   mat_to_rotvec(R, o + 3);
@@ -1400,7 +1404,7 @@ static int b_pose_inv(vm *V, const us_node *n, sv *a, sv *out) {
   if (pose_args(V, n, a, 0) != X_OK) return X_ERR;
   const double *p = a[0].u.p;
   double R[9], Rt[9], o[6];
-  rotvec_to_mat(p + 3, R);
+  urt__us_rotvec_to_mat(p + 3, R);
   for (int i = 0; i < 3; i++) {
     for (int j = 0; j < 3; j++) Rt[3 * i + j] = R[3 * j + i];
   }
@@ -1409,6 +1413,65 @@ static int b_pose_inv(vm *V, const us_node *n, sv *a, sv *out) {
   *out = mk_pose(o);
   return X_OK;
 }
+
+//---- RTDE registers (protocols.md §2.5–2.6) ----
+
+/* the register number argument 0, checked against the bank's size */
+static int reg_index(vm *V, const us_node *n, sv *a, int count, int *out) {
+  int64_t k;
+  if (arg_int(V, n, a, 0, &k) != X_OK) return X_ERR;
+  if (k < 0 || k >= count) {
+    return fail(V, n, "%.*s: register %lld out of range 0..%d", n->name->len, n->name->s,
+                (long long)k, count - 1);
+  }
+  *out = (int)k;
+  return X_OK;
+}
+
+static int reg_write(vm *V, const us_node *n, sv *a, int kind, int count) {
+  const urt_script_host_t *h = V->h->host;
+  int k = 0;
+  double x;
+  if (!h->write_output_register) return fail(V, n, "RTDE registers are not available");
+  if (reg_index(V, n, a, count, &k) != X_OK) return X_ERR;
+  if (kind == URT_SCRIPT_REG_INT) {
+    int64_t i;
+    if (arg_int(V, n, a, 1, &i) != X_OK) return X_ERR;
+    if (i < INT32_MIN || i > INT32_MAX) return fail(V, n, "%.*s: %lld does not fit 32 bits", n->name->len, n->name->s, (long long)i);
+    x = (double)i;
+  } else if (kind == URT_SCRIPT_REG_BIT) {
+    bool b;
+    if (arg_bool(V, n, a, 1, &b) != X_OK) return X_ERR;
+    x = b ? 1 : 0;
+  } else if (arg_num(V, n, a, 1, 0, &x) != X_OK) {
+    return X_ERR;
+  }
+  h->write_output_register(h->ctx, kind, k, x);
+  return X_OK;
+}
+
+static int reg_read(vm *V, const us_node *n, sv *a, sv *out, int kind, bool input) {
+  const urt_script_host_t *h = V->h->host;
+  int k = 0;
+  if (!h->read_registers) return fail(V, n, "RTDE registers are not available");
+  if (reg_index(V, n, a, kind == URT_SCRIPT_REG_BIT ? URT_RTDE_NBITREG : URT_RTDE_NREG, &k) != X_OK) return X_ERR;
+  urt_rtde_registers_t r;
+  h->read_registers(h->ctx, &r);
+  if (kind == URT_SCRIPT_REG_INT) *out = mk_int(input ? r.in_int[k] : r.out_int[k]);
+  else if (kind == URT_SCRIPT_REG_DOUBLE) *out = mk_float(input ? r.in_double[k] : r.out_double[k]);
+  else *out = mk_bool((input ? r.in_bit[k] : r.out_bit[k]) != 0);
+  return X_OK;
+}
+
+static int b_write_output_integer_register(vm *V, const us_node *n, sv *a, sv *out) { return reg_write(V, n, a, URT_SCRIPT_REG_INT, URT_RTDE_NREG); }
+static int b_write_output_float_register(vm *V, const us_node *n, sv *a, sv *out) { return reg_write(V, n, a, URT_SCRIPT_REG_DOUBLE, URT_RTDE_NREG); }
+static int b_write_output_boolean_register(vm *V, const us_node *n, sv *a, sv *out) { return reg_write(V, n, a, URT_SCRIPT_REG_BIT, URT_RTDE_NBITREG); }
+static int b_read_input_integer_register(vm *V, const us_node *n, sv *a, sv *out) { return reg_read(V, n, a, out, URT_SCRIPT_REG_INT, true); }
+static int b_read_input_float_register(vm *V, const us_node *n, sv *a, sv *out) { return reg_read(V, n, a, out, URT_SCRIPT_REG_DOUBLE, true); }
+static int b_read_input_boolean_register(vm *V, const us_node *n, sv *a, sv *out) { return reg_read(V, n, a, out, URT_SCRIPT_REG_BIT, true); }
+static int b_read_output_integer_register(vm *V, const us_node *n, sv *a, sv *out) { return reg_read(V, n, a, out, URT_SCRIPT_REG_INT, false); }
+static int b_read_output_float_register(vm *V, const us_node *n, sv *a, sv *out) { return reg_read(V, n, a, out, URT_SCRIPT_REG_DOUBLE, false); }
+static int b_read_output_boolean_register(vm *V, const us_node *n, sv *a, sv *out) { return reg_read(V, n, a, out, URT_SCRIPT_REG_BIT, false); }
 
 static int b_noop(vm *V, const us_node *n, sv *a, sv *out) { return X_OK; }
 
@@ -1485,6 +1548,16 @@ static const builtin kBuiltins[] = {
     {"pose_trans", b_pose_trans, 2, P("p_from", "p_from_to")},
     {"pose_add", b_pose_add, 2, P("p_1", "p_2")},
     {"pose_inv", b_pose_inv, 1, P("p_from")},
+    // RTDE registers
+    {"write_output_integer_register", b_write_output_integer_register, 2, P("address", "value")},
+    {"write_output_float_register", b_write_output_float_register, 2, P("address", "value")},
+    {"write_output_boolean_register", b_write_output_boolean_register, 2, P("address", "value")},
+    {"read_input_integer_register", b_read_input_integer_register, 1, P("address")},
+    {"read_input_float_register", b_read_input_float_register, 1, P("address")},
+    {"read_input_boolean_register", b_read_input_boolean_register, 1, P("address")},
+    {"read_output_integer_register", b_read_output_integer_register, 1, P("address")},
+    {"read_output_float_register", b_read_output_float_register, 1, P("address")},
+    {"read_output_boolean_register", b_read_output_boolean_register, 1, P("address")},
     // known URScript, not emulated: a runtime error before anything of the call happens
     {"movep", b_unsupported, 0, P(NULL)},
     {"movec", b_unsupported, 0, P(NULL)},
@@ -1507,12 +1580,6 @@ static const builtin kBuiltins[] = {
     {"set_tool_voltage", b_unsupported, 0, P(NULL)},
     {"set_target_payload", b_unsupported, 0, P(NULL)},
     {"rpc_factory", b_unsupported, 0, P(NULL)},
-    {"write_output_boolean_register", b_unsupported, 0, P(NULL)},
-    {"write_output_integer_register", b_unsupported, 0, P(NULL)},
-    {"write_output_float_register", b_unsupported, 0, P(NULL)},
-    {"read_input_boolean_register", b_unsupported, 0, P(NULL)},
-    {"read_input_integer_register", b_unsupported, 0, P(NULL)},
-    {"read_input_float_register", b_unsupported, 0, P(NULL)},
 };
 #undef P
 

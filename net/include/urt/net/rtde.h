@@ -134,7 +134,8 @@ typedef struct urt_rtde_inputs {
 /* Fold src (newer) into dst (older), as if both had been applied in order. */
 void urt_rtde_inputs_merge(urt_rtde_inputs_t *dst, const urt_rtde_inputs_t *src);
 
-/* Copy the register part of the inputs into the bank's in_* arrays. */
+/* Copy the register part of the inputs into the bank's in_* arrays; count every int register
+ * write in in_int_writes. */
 void urt_rtde_inputs_apply_registers(const urt_rtde_inputs_t *in, urt_rtde_registers_t *r);
 
 //---- registry: which connection owns which input ----
