@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // core/controller.cpp — the UR controller's motion layer (urt/controller.h): robot and safety
-// state machine, motion generators (movej, movel, servoj, speedj, speedl, stopj, stopl, direct),
+// state machine, motion generators (movej, movel, servoj, speedj, speedl, stopj, stopl, direct,
+// servol, servoc, direct torque, freedrive, force mode, pause),
 // the set-point interpolation the physics steps follow, model feed-forward, inverse kinematics
 // and the motor thermal model. Everything runs on the physics thread: fixed-size Eigen on the
 // stack, no allocation, no exceptions. Context: RT unless stated.
@@ -21,6 +22,27 @@
 // - HALT decelerates like stopj(4 rad/s²); it does not change program_state (the runner does).
 // - The payload is stored (snapshot), not added to the dynamics: the physics (urt_step) has no
 //   payload either, so a feed-forward with it would only create a model mismatch.
+// - PAUSE multiplies the slider's scaling by a pause factor that slews to 0 at 4 /s (RESUME: back
+//   to 1), so movej/movel (and a movej waiting behind a stop) slow down along their path, hold,
+//   and continue; streamed motions (servoj/l/c, speedj/l, direct, torque, freedrive, force) stop
+//   as with HALT. PROGRAM_STATE STOPPED clears the pause and stops what it held.
+// - SET_WRENCH writes d->wrench_ext (each force ≤ 1000 N, torque ≤ 200 N m, finite).
+// - SET_GRAVITY changes the controller's model only (feed-forward, freedrive and torque-mode
+//   gravity), as set_gravity does on a real controller; the world's gravity is the model's
+//   (urt_model_t is const), so a wrong value shows as a tracking error, as on a real arm.
+// - TORQUE (directTorque) and FREEDRIVE run the drives in torque mode (urt_command_t.torque_mask:
+//   i_ref = τ/(k_t τ_gear), position and speed loops off). The set-point follows the arm. TORQUE
+//   applies the command each period (index 1 adds the friction model at the actual speed); with
+//   no new TORQUE for 4 periods the drives return to position control, decelerate at 4 rad/s²
+//   and hold. Torques above torque_max are a protective stop.
+// - FREEDRIVE: τ = g(q) of the controller's gravity; held feature-frame axes (q[i] = 0) get a
+//   Cartesian spring-damper toward the pose freedrive began at (tick_freedrive).
+// - SERVOL: IK of the pose once per command (from the set-point), then servoj's filter. SERVOC:
+//   the tool twist ramps at a toward min(v, √(2 a d)) along the line to the goal; r is treated
+//   as 0 (no blending); its id is done on arrival.
+// - FORCE_MODE: a first-order admittance per compliant task-frame axis on the F/T reading
+//   d->wrench_ext (an ideal sensor), speed-limited; the other axes follow a speedl inside force
+//   mode (or hold) and are checked against their deviation limits (tick_force).
 #include <cmath>
 #include <cstring>
 
@@ -52,6 +74,10 @@ constexpr double kForceGain = 0.005;    // force-mode admittance, translation [(
 constexpr double kForceGainRot = 0.05;  // and rotation [(rad/s)/(N m)]
 constexpr double kForceAcc = 2.5;       // force-mode tool acceleration bound [m/s²]
 constexpr double kForceAccRot = 5.0;    // and angular [rad/s²]
+constexpr double kHoldK = 1e4;          // freedrive's spring on held axes, translation [N/m]
+constexpr double kHoldD = 300.0;        // and damper [N s/m]
+constexpr double kHoldKRot = 1000.0;    // rotation [N m/rad]
+constexpr double kHoldDRot = 20.0;      // [N m s/rad]
 constexpr uint32_t kAllJoints = (1u << URT_NJ) - 1u;
 
 // ---- plans, stored in c->plan (copied in and out once per tick) ----
@@ -97,8 +123,9 @@ struct TorquePlan {
 };
 
 struct FreedrivePlan {
-  double free[URT_NJ];           // 1: joint free (torque mode), 0: held at q_hold
-  double q_hold[URT_NJ];
+  double free[6];                // feature-frame axes x y z rx ry rz: 1 free, 0 held
+  double feature[6];             // the feature frame (pose in the base frame)
+  double p_hold[3], r_hold[3];   // TCP pose when freedrive began (base frame)
 };
 
 struct ServocPlan {
@@ -782,6 +809,54 @@ bool tick_force(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, Plan& 
   return true;
 }
 
+// freedrive: every drive in torque mode carrying the controller's gravity model, so that only
+// friction and the drives' inertia resist a push. Held axes of the feature frame (free[i] = 0)
+// get a Cartesian spring-damper toward the pose freedrive began at, τ += Jᵀ w with
+// w = K e − D v per held axis (10 kN/m, 300 N s/m; 1000 N m/rad, 20 N m s/rad): a push on a
+// held axis deflects it by about |F|/K plus what friction holds.
+void tick_freedrive(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, Plan& p) noexcept {
+  const FreedrivePlan& fd = p.freedrive;
+  const Vec6 q = actual_q(d);
+  follow_actual(m, c, d, kAllJoints);
+  Vec6 tau;
+  ctrl_rnea(m, c, q, Vec6::Zero(), Vec6::Zero(), tau);
+
+  bool held = false;
+  for (int i = 0; i < 6; i++) {
+    held = held || fd.free[i] == 0.0;
+  }
+  if (held) {
+    Mat3 R;
+    Vec3 pos;
+    Mat6 J;
+    tcp_kinematics(m->arm, c->tcp_offset, q, R, pos, &J);
+    Vec6 qd;
+    for (int j = 0; j < URT_NJ; j++) {
+      qd[j] = d->x[j][URT_X_QD];
+    }
+    const Vec6 x = J * qd;
+    const Mat3 Rf = rotation_from_rotvec(Vec3(fd.feature[3], fd.feature[4], fd.feature[5]));
+    const Mat3 Rf_T = Rf.transpose();
+    const Mat3 R_hold = rotation_from_rotvec(Vec3(fd.r_hold[0], fd.r_hold[1], fd.r_hold[2]));
+    const Vec3 e_p = Rf_T * Vec3(Vec3(fd.p_hold[0], fd.p_hold[1], fd.p_hold[2]) - pos);
+    const Vec3 e_r = Rf_T * Vec3(R * rotvec_from_rotation(R.transpose() * R_hold));
+    const Vec3 v_f = Rf_T * Vec3(x.head<3>()), w_f = Rf_T * Vec3(x.tail<3>());
+    Vec3 f_f, m_f;
+    for (int i = 0; i < 3; i++) {
+      f_f[i] = fd.free[i] == 0.0 ? kHoldK * e_p[i] - kHoldD * v_f[i] : 0.0;
+      m_f[i] = fd.free[3 + i] == 0.0 ? kHoldKRot * e_r[i] - kHoldDRot * w_f[i] : 0.0;
+    }
+    Vec6 w;
+    w.head<3>() = Rf * f_f;
+    w.tail<3>() = Rf * m_f;
+    tau += J.transpose() * w;
+  }
+  for (int j = 0; j < URT_NJ; j++) {
+    c->tau_ff[j] = clamp_torque(m, j, tau[j]);
+  }
+  c->torque_mask = kAllJoints;
+}
+
 // ---- thermal ----
 
 void tick_thermal(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d) noexcept {
@@ -1149,6 +1224,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         for (int j = 0; j < URT_NJ; j++) {
           bad_arg = bad_arg || !(cmd->q[j] == 0.0 || cmd->q[j] == 1.0);
         }
+        bad_arg = bad_arg || !all_finite(cmd->pose, 6);
         break;
       case URT_CTRL_DIRECT:
         bad_target = target_faults(m, cmd->q);
@@ -1312,9 +1388,13 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         break;
       case URT_CTRL_FREEDRIVE:
         if (prev_motion != URT_MOTION_FREEDRIVE) {
-          std::memcpy(p.freedrive.q_hold, c->q1, sizeof p.freedrive.q_hold);
+          double pose[6];
+          urt_ctrl_forward_kinematics_tcp(m, c->tcp_offset, c->q1, pose);
+          std::memcpy(p.freedrive.p_hold, pose, sizeof p.freedrive.p_hold);
+          std::memcpy(p.freedrive.r_hold, pose + 3, sizeof p.freedrive.r_hold);
         }
         std::memcpy(p.freedrive.free, cmd->q, sizeof p.freedrive.free);
+        std::memcpy(p.freedrive.feature, cmd->pose, sizeof p.freedrive.feature);
         mark_done(c, cmd->id);  // teach mode returns at once; it lasts until ended
         c->motion = URT_MOTION_FREEDRIVE;
         break;
@@ -1635,29 +1715,9 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
       mark_done(c, c->motion_id);
       break;
     }
-    case URT_MOTION_FREEDRIVE: {
-      // free joints: torque mode carrying the controller's gravity model, nothing else (only
-      // friction and the drives' inertia resist); held joints: position control at q_hold
-      FreedrivePlan& fd = p.freedrive;
-      uint32_t mask = 0;
-      for (int j = 0; j < URT_NJ; j++) {
-        mask |= fd.free[j] != 0.0 ? 1u << j : 0u;
-      }
-      follow_actual(m, c, d, mask);
-      for (int j = 0; j < URT_NJ; j++) {
-        if (!((mask >> j) & 1u)) {
-          c->q1[j] = fd.q_hold[j];
-          c->qd1[j] = c->qdd1[j] = 0.0;
-        }
-      }
-      Vec6 g;
-      ctrl_rnea(m, c, actual_q(d), Vec6::Zero(), Vec6::Zero(), g);
-      for (int j = 0; j < URT_NJ; j++) {
-        c->tau_ff[j] = ((mask >> j) & 1u) ? clamp_torque(m, j, g[j]) : 0.0;
-      }
-      c->torque_mask = mask;
+    case URT_MOTION_FREEDRIVE:
+      tick_freedrive(m, c, d, p);
       break;
-    }
     case URT_MOTION_FORCE:
       if (!tick_force(m, c, d, p)) {
         protective_stop(c, d, URT_CTRL_FAULT_BAD_TARGET, URT_PSTOP_POS_LIMIT);

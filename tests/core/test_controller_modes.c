@@ -102,6 +102,39 @@ static void tcp_actual(const rig_t *r, double pose[6]) {
   urt_ctrl_forward_kinematics_tcp(r->m, r->c->tcp_offset, q, pose);
 }
 
+static void rotvec_matrix(const double *r, double R[9]) {
+  double th = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+  double k[3] = {0.0, 0.0, 1.0};
+  if (th > 0.0) {
+    for (int i = 0; i < 3; i++) {
+      k[i] = r[i] / th;
+    }
+  }
+  double c = cos(th), s = sin(th), v = 1.0 - c;
+  R[0] = c + k[0] * k[0] * v;
+  R[1] = k[0] * k[1] * v - k[2] * s;
+  R[2] = k[0] * k[2] * v + k[1] * s;
+  R[3] = k[1] * k[0] * v + k[2] * s;
+  R[4] = c + k[1] * k[1] * v;
+  R[5] = k[1] * k[2] * v - k[0] * s;
+  R[6] = k[2] * k[0] * v - k[1] * s;
+  R[7] = k[2] * k[1] * v + k[0] * s;
+  R[8] = c + k[2] * k[2] * v;
+}
+
+/* the angle between the orientations of two poses [rad] */
+static double rot_angle(const double *a, const double *b) {
+  double A[9], B[9], tr = 0.0;
+  rotvec_matrix(a + 3, A);
+  rotvec_matrix(b + 3, B);
+  for (int i = 0; i < 3; i++) {
+    for (int k = 0; k < 3; k++) {
+      tr += A[3 * k + i] * B[3 * k + i];  // trace(Aᵀ B)
+    }
+  }
+  return acos(fmax(-1.0, fmin(1.0, 0.5 * (tr - 1.0))));
+}
+
 static urt_snapshot_t snap(rig_t *r) {
   urt_snapshot_t s;
   urt_snapshot_fill(r->m, r->c, r->d, &s);
@@ -389,6 +422,44 @@ static void test_freedrive__holds_without_a_wrench_and_gives_way_to_one(void **s
   rig_free(&r);
 }
 
+static void test_freedrive__held_axes_resist_free_axis_gives_way(void **state) {
+  (void)state;
+  rig_t r = rig_new();
+  go_to_work_pose(&r);
+  urt_ctrl_cmd_t fd = cmd_of(&r, URT_CTRL_FREEDRIVE);
+  fd.index = 1;
+  fd.q[2] = 1.0;  // only z free, in the base frame (pose zeros)
+  double p0[6], p1[6];
+  tcp_actual(&r, p0);
+  rig_period(&r, &fd);
+  run_for(&r, 0.3);
+  tcp_actual(&r, p1);
+  double still = 0.0;
+  for (int i = 0; i < 6; i++) {
+    still = fmax(still, fabs(p1[i] - p0[i]));
+  }
+  // held x against a free z: friction makes the shoulder stick below ~50 N
+  const double w[6] = {20.0, 0.0, -60.0, 0.0, 0.0, 0.0};
+  memcpy(r.d->wrench_ext, w, sizeof w);
+  run_for(&r, 0.3);
+  tcp_actual(&r, p1);
+  const double rot = rot_angle(p0, p1);
+  print_message("freedrive z only: still %.2e; under [20 0 -60] N for 0.3 s: z %+.1f mm, x %+.2f "
+                "mm, y %+.2f mm, rotation %.2e rad\n",
+                still, 1e3 * (p1[2] - p0[2]), 1e3 * (p1[0] - p0[0]), 1e3 * (p1[1] - p0[1]), rot);
+  assert_true(still < 1e-4);
+  assert_true(p1[2] - p0[2] < -0.02);
+  assert_true(fabs(p1[0] - p0[0]) < 5e-3 && fabs(p1[1] - p0[1]) < 5e-3);
+  assert_true(rot < 2e-2);  // the held rotation lags while the wrist joints accelerate
+  memset(r.d->wrench_ext, 0, sizeof r.d->wrench_ext);
+  fd.index = 0;
+  rig_period(&r, &fd);
+  run_for(&r, 0.3);
+  assert_int_equal(r.c->motion, URT_MOTION_IDLE);
+  assert_int_equal(r.d->pstop, 0);
+  rig_free(&r);
+}
+
 //---- servol / servoc ----
 
 static void test_servol__reaches_a_streamed_pose(void **state) {
@@ -499,10 +570,7 @@ static void test_force_mode__complies_along_z_and_holds_the_other_axes(void **st
   tcp_actual(&r, p3);
   const double vz_contact = (p3[2] - p1[2]) / 0.3;
   const double dxy = fmax(fabs(p3[0] - p0[0]), fabs(p3[1] - p0[1]));
-  double drot = 0.0;
-  for (int i = 3; i < 6; i++) {
-    drot = fmax(drot, fabs(p3[i] - p0[i]));
-  }
+  const double drot = rot_angle(p0, p3);
   print_message("force mode +10 N z: free-air speed %.4f m/s; against -10 N %.2e m/s; x/y moved "
                 "%.2e m, rotation %.2e rad\n", vz, vz_contact, dxy, drot);
   assert_near(vz, 0.05, 0.003);
@@ -601,6 +669,7 @@ int main(void) {
       cmocka_unit_test(test_set_wrench__shows_in_tcp_force_and_bad_values_are_refused),
       cmocka_unit_test(test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it),
       cmocka_unit_test(test_freedrive__holds_without_a_wrench_and_gives_way_to_one),
+      cmocka_unit_test(test_freedrive__held_axes_resist_free_axis_gives_way),
       cmocka_unit_test(test_servol__reaches_a_streamed_pose),
       cmocka_unit_test(test_servoc__moves_at_tool_speed_v_to_the_pose),
       cmocka_unit_test(test_force_mode__complies_along_z_and_holds_the_other_axes),

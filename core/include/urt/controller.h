@@ -115,8 +115,9 @@ typedef enum urt_ctrl_cmd_kind {
   URT_CTRL_SERVOL,            /* pose[6], t, lookahead_time, gain (servoj in tool space)      */
   URT_CTRL_SERVOC,            /* pose[6], a, v, r (r treated as 0)                          */
   URT_CTRL_TORQUE,            /* tau[6] joint torques [N m]; index 1: compensate friction    */
-  URT_CTRL_FREEDRIVE,         /* index 1: enter teach mode (q[j] = 1: joint j free, 0: held
-                                 in position), index 0: end and hold where the arm is        */
+  URT_CTRL_FREEDRIVE,         /* index 1: enter teach mode; q[6] = free axes x y z rx ry rz
+                                 (1 free, 0 held) of the feature frame pose[6] (base frame;
+                                 zeros: the base); index 0: end and hold where the arm is    */
   URT_CTRL_FORCE_MODE,        /* pose = task frame, q = selection (0/1), tau = wrench,
                                  index = type (1..3), qd = limits (speeds [m/s, rad/s] of the
                                  compliant axes / deviations [m, rad] of the others); not a
