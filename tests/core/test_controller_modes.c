@@ -608,6 +608,37 @@ static void test_force_mode__complies_along_z_and_holds_the_other_axes(void **st
   rig_free(&r);
 }
 
+static void test_force_mode__type_1_pulls_toward_the_frame_origin(void **state) {
+  (void)state;
+  rig_t r = rig_new();
+  go_to_work_pose(&r);
+  double p0[6], p1[6];
+  tcp_actual(&r, p0);
+  urt_ctrl_cmd_t f = cmd_of(&r, URT_CTRL_FORCE_MODE);
+  f.id = 0;
+  f.index = 1;  // y from the TCP toward the frame's origin
+  f.pose[0] = p0[0] + 0.3;
+  f.pose[1] = p0[1];
+  f.pose[2] = p0[2];
+  f.q[1] = 1.0;
+  f.tau[1] = 10.0;
+  const double limits[6] = {0.1, 0.1, 0.1, 0.5, 0.5, 0.5};
+  memcpy(f.qd, limits, sizeof f.qd);
+  rig_period(&r, &f);
+  run_for(&r, 0.5);
+  tcp_actual(&r, p1);
+  print_message("force mode type 1, origin 0.3 m along +x, +10 N along y: moved %+.1f %+.1f %+.1f "
+                "mm\n", 1e3 * (p1[0] - p0[0]), 1e3 * (p1[1] - p0[1]), 1e3 * (p1[2] - p0[2]));
+  assert_true(p1[0] - p0[0] > 0.015);
+  assert_true(fabs(p1[1] - p0[1]) < 1e-3 && fabs(p1[2] - p0[2]) < 1e-3);
+  urt_ctrl_cmd_t end = cmd_of(&r, URT_CTRL_FORCE_MODE_END);
+  rig_period(&r, &end);
+  run_for(&r, 0.2);
+  assert_int_equal(r.c->motion, URT_MOTION_IDLE);
+  assert_int_equal(r.d->pstop, 0);
+  rig_free(&r);
+}
+
 //---- real-time rules ----
 
 static void test_modes__no_heap_allocation(void **state) {
@@ -673,6 +704,7 @@ int main(void) {
       cmocka_unit_test(test_servol__reaches_a_streamed_pose),
       cmocka_unit_test(test_servoc__moves_at_tool_speed_v_to_the_pose),
       cmocka_unit_test(test_force_mode__complies_along_z_and_holds_the_other_axes),
+      cmocka_unit_test(test_force_mode__type_1_pulls_toward_the_frame_origin),
       cmocka_unit_test(test_modes__no_heap_allocation),
   };
   return cmocka_run_group_tests_name("core/controller_modes", tests, NULL, NULL);

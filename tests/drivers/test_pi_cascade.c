@@ -54,6 +54,23 @@ static void test_pi_cascade__voltage_saturates_at_the_supply(void **state) {
   assert_near(o.d.xi_c, 0.0, 0.0);
 }
 
+static void test_pi_cascade__torque_mode_follows_the_feedforward_alone(void **state) {
+  (void)state;
+  // a position error, a speed error and a wound-up integrator: none reaches i_ref
+  urt_pi_cascade_in_t in = {0.1, 0.5, 2.0, 0.0, 3.0, 2.0, 1};
+  urt_pi_cascade_state_t st = {7.0, 0.0};
+  urt_pi_cascade_out_t o = urt_pi_cascade_eval(&kShoulder, 101.0, &st, &in);
+  assert_near(o.i_ref, 2.0, 0.0);
+  assert_false(o.i_sat);
+  assert_near(o.d.xi_v, 0.0, 0.0);  // held for the return to position control
+  assert_near(o.d.xi_c, 0.0, 0.0);  // i_ref = i_fb here
+  // clamped at ±i_max like the speed loop's output
+  in.i_ff = -50.0;
+  o = urt_pi_cascade_eval(&kShoulder, 101.0, &st, &in);
+  assert_near(o.i_ref, -10.91, 0.0);
+  assert_true(o.i_sat);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_pi_cascade__position_gain_is_not_multiplied_by_the_ratio),
@@ -61,6 +78,7 @@ int main(void) {
       cmocka_unit_test(test_pi_cascade__current_saturates_at_i_max_and_integrator_holds),
       cmocka_unit_test(test_pi_cascade__saturated_integrator_unwinds_when_error_reverses),
       cmocka_unit_test(test_pi_cascade__voltage_saturates_at_the_supply),
+      cmocka_unit_test(test_pi_cascade__torque_mode_follows_the_feedforward_alone),
   };
   return cmocka_run_group_tests_name("drivers/pi_cascade", tests, NULL, NULL);
 }
