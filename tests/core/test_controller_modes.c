@@ -460,6 +460,34 @@ static void test_freedrive__held_axes_resist_free_axis_gives_way(void **state) {
   rig_free(&r);
 }
 
+static void test_set_gravity__changes_the_controllers_model_not_the_world(void **state) {
+  (void)state;
+  rig_t r = rig_new();
+  go_to_work_pose(&r);
+  // the controller believes there is no gravity: in freedrive the arm falls (a model off by a
+  // little would stick: friction holds up to ~10 N m on the big joints)
+  urt_ctrl_cmd_t g = cmd_of(&r, URT_CTRL_SET_GRAVITY);
+  rig_period(&r, &g);
+  double z0[6], z1[6];
+  tcp_actual(&r, z0);
+  urt_ctrl_cmd_t fd = cmd_of(&r, URT_CTRL_FREEDRIVE);
+  fd.index = 1;
+  for (int j = 0; j < URT_NJ; j++) {
+    fd.q[j] = 1.0;
+  }
+  rig_period(&r, &fd);
+  run_for(&r, 0.3);
+  tcp_actual(&r, z1);
+  print_message("freedrive with the controller's gravity zero: the TCP sank %.1f mm in 0.3 s\n",
+                1e3 * (z0[2] - z1[2]));
+  assert_true(z1[2] < z0[2] - 5e-3);
+  fd.index = 0;
+  rig_period(&r, &fd);
+  run_for(&r, 0.3);
+  assert_int_equal(r.d->pstop, 0);
+  rig_free(&r);
+}
+
 //---- servol / servoc ----
 
 static void test_servol__reaches_a_streamed_pose(void **state) {
@@ -701,6 +729,7 @@ int main(void) {
       cmocka_unit_test(test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it),
       cmocka_unit_test(test_freedrive__holds_without_a_wrench_and_gives_way_to_one),
       cmocka_unit_test(test_freedrive__held_axes_resist_free_axis_gives_way),
+      cmocka_unit_test(test_set_gravity__changes_the_controllers_model_not_the_world),
       cmocka_unit_test(test_servol__reaches_a_streamed_pose),
       cmocka_unit_test(test_servoc__moves_at_tool_speed_v_to_the_pose),
       cmocka_unit_test(test_force_mode__complies_along_z_and_holds_the_other_axes),

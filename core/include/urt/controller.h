@@ -110,8 +110,10 @@ typedef enum urt_ctrl_cmd_kind {
   URT_CTRL_PAUSE,             /* program paused: planned motion decelerates along its path  */
   URT_CTRL_RESUME,            /* continue after PAUSE                                       */
   URT_CTRL_SET_WRENCH,        /* pose[6] = external wrench at the TCP, base frame [N, N m]   */
-  URT_CTRL_SET_GRAVITY,       /* pose[0..2] = gravity vector in the base frame [m/s²]: the
-                                 controller's model (feed-forward, freedrive), not the world's */
+  URT_CTRL_SET_GRAVITY,       /* pose[0..2] = gravity vector in the base frame [m/s²], as the
+                                 model's (floor: 0 0 −9.81; URScript set_gravity(d) gives the
+                                 opposite, away from the earth: negate it). The controller's
+                                 model only (feed-forward, freedrive), not the world's         */
   URT_CTRL_SERVOL,            /* pose[6], t, lookahead_time, gain (servoj in tool space)      */
   URT_CTRL_SERVOC,            /* pose[6], a, v, r (r treated as 0)                          */
   URT_CTRL_TORQUE,            /* tau[6] joint torques [N m]; index 1: compensate friction    */
