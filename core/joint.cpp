@@ -26,7 +26,7 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
   double q_fb = ss.p + in.eps_q;
 
   // controller: natural saturations, or forced ones for the tables
-  urt_pi_cascade_in_t ci = {in.q_set, in.qd_set, in.i_ff, q_fb, qdm_fb, i_fb};
+  urt_pi_cascade_in_t ci = {in.q_set, in.qd_set, in.i_ff, q_fb, qdm_fb, i_fb, in.torque};
   urt_pi_cascade_out_t co;
   if (forced == kNatural) {
     co = urt_pi_cascade_eval(&pc, gp.ratio, &cs, &ci);
@@ -84,7 +84,8 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
     aux->i_fb = i_fb;
     aux->qdm_fb = qdm_fb;
     aux->q_fb = q_fb;
-    aux->active_set = (co.i_sat ? kCurrentSat : 0) | (co.v_sat ? kVoltageSat : 0);
+    // torque mode has the current-saturated structure: i_ref independent of the state, ξ_v held
+    aux->active_set = (co.i_sat || in.torque ? kCurrentSat : 0) | (co.v_sat ? kVoltageSat : 0);
   }
 }
 
@@ -99,6 +100,7 @@ JointInput joint_input(const urt_model_t* m, const urt_data_t* d, int j, double 
   in.eps_w = d->eps_w[j];
   in.eps_q = d->eps_q[j];
   in.drives_engaged = m->drives_engaged;
+  in.torque = (int)((c.torque_mask >> j) & 1u);
   return in;
 }
 

@@ -28,6 +28,7 @@ struct JointInput {
   double i_ff;             // current feed-forward [A]
   double eps_i, eps_w, eps_q;  // held measurement errors (sensors.h)
   int drives_engaged;
+  int torque;              // 1: torque mode (urt_command_t.torque_mask)
 };
 
 // Signals computed along the way, for outputs and for the integrator.

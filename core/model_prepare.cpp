@@ -47,7 +47,7 @@ double output_inertia_min(const urt_model_t* m, int j) {
 void drive_columns(const urt_model_t* m, int j, int set, MatD& a, VecD& b_q, VecD& b_qd,
                    VecD& f_qset, VecD& f_qdset) {
   double x[URT_NXJ] = {0}, f0[URT_NXJ], f1[URT_NXJ];
-  JointInput in = {0, 0, 0, 0, 0, 0, 1};
+  JointInput in = {0, 0, 0, 0, 0, 0, 1, 0};
   JointAux aux;
   drive_rhs(m, j, x, in, set, f0, &aux);
   auto column = [&](VecD& col) {

@@ -16,6 +16,9 @@
 // - tool_accel: specific force (acceleration minus gravity) of the TCP point, tool frame.
 // - v_robot: the 48 V supply; i_robot = Σ V_j i_j / v_robot (power balance of the drives,
 //   regeneration included); v_main: the same bus.
+// - program_state: the runner's, shown as PAUSED while the controller is paused over PLAYING;
+//   speed_scaling: the slider's scaling times the pause's; control_mode (RTDE): 0 position,
+//   1 teach (freedrive), 2 force, 3 torque; m_target of a torque-controlled joint: its command.
 // - digital_in: 0 (no inputs are modelled). Loop diagnostics (exec_time, overruns, …) are zero
 //   here: the loop writes them after this call.
 #include <cmath>
@@ -88,7 +91,8 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
     if (m->friction[j].enabled && c->qd1[j] != 0.0) {
       f = urt_friction_g(&m->friction[j], c->qd1[j]) * std::tanh(c->qd1[j] / 2e-3);
     }
-    s->m_target[j] = id_target[j] + f + c->tau_ff[j];
+    // a torque-controlled joint's target torque is what it was told to make
+    s->m_target[j] = ((c->torque_mask >> j) & 1u) ? c->tau_ff[j] : id_target[j] + f + c->tau_ff[j];
     s->i_target[j] = s->m_target[j] / (kt * ratio);
 
     s->q[j] = d->q_fb[j];
@@ -193,12 +197,25 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   s->robot_mode = c->robot_mode;
   s->safety_mode = c->safety_mode;
   s->safety_status = c->safety_mode;
-  s->program_state = c->program_state;
-  s->control_mode = 0;  // POSITION
+  // the controller's pause shows over the runner's PLAYING
+  s->program_state = c->paused && c->program_state == URT_PROGRAM_PLAYING ? URT_PROGRAM_PAUSED
+                                                                          : c->program_state;
+  // RTDE robot control mode: 0 position, 1 teach, 2 force, 3 torque
+  switch (c->motion) {
+    case URT_MOTION_FREEDRIVE:
+      s->control_mode = 1;
+      break;
+    case URT_MOTION_TORQUE:
+      s->control_mode = 3;
+      break;
+    default:
+      s->control_mode = c->force_mode ? 2 : 0;
+      break;
+  }
   s->pstop = d->pstop;
   s->ctrl_fault = c->fault;
   s->speed_slider = c->speed_slider;
-  s->speed_scaling = c->speed_scaling;
+  s->speed_scaling = c->speed_scaling * c->pause_scale;
   s->motion = c->motion;
   s->motion_id = c->motion_id;
   s->motion_done_id = c->motion_done_id;

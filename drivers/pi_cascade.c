@@ -16,10 +16,17 @@ urt_pi_cascade_out_t urt_pi_cascade_eval(const urt_pi_cascade_params_t *p, doubl
   // speed loop: the integrator stops while the limit holds and the error pushes further out,
   // so it unwinds as soon as the error changes sign
   double e_v = out.qdm_ref - in->qdm_fb;
-  double u_v = p->p_vel * e_v + p->i_vel * s->xi_v + in->i_ff;
-  out.i_ref = clamp(u_v, p->i_max);
-  out.i_sat = out.i_ref != u_v;
-  out.d.xi_v = (out.i_sat && e_v * u_v > 0.0) ? 0.0 : e_v;
+  if (in->torque) {
+    // torque mode: the current reference is the feed-forward alone, ξ_v held
+    out.i_ref = clamp(in->i_ff, p->i_max);
+    out.i_sat = out.i_ref != in->i_ff;
+    out.d.xi_v = 0.0;
+  } else {
+    double u_v = p->p_vel * e_v + p->i_vel * s->xi_v + in->i_ff;
+    out.i_ref = clamp(u_v, p->i_max);
+    out.i_sat = out.i_ref != u_v;
+    out.d.xi_v = (out.i_sat && e_v * u_v > 0.0) ? 0.0 : e_v;
+  }
 
   // current loop and PWM saturation, same anti-windup
   double e_c = out.i_ref - in->i_fb;

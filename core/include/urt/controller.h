@@ -110,13 +110,20 @@ typedef enum urt_ctrl_cmd_kind {
   URT_CTRL_PAUSE,             /* program paused: planned motion decelerates along its path  */
   URT_CTRL_RESUME,            /* continue after PAUSE                                       */
   URT_CTRL_SET_WRENCH,        /* pose[6] = external wrench at the TCP, base frame [N, N m]   */
-  URT_CTRL_SET_GRAVITY,       /* pose[0..2] = gravity vector in the base frame [m/s²]        */
+  URT_CTRL_SET_GRAVITY,       /* pose[0..2] = gravity vector in the base frame [m/s²], as the
+                                 model's (floor: 0 0 −9.81; URScript set_gravity(d) gives the
+                                 opposite, away from the earth: negate it). The controller's
+                                 model only (feed-forward, freedrive), not the world's         */
   URT_CTRL_SERVOL,            /* pose[6], t, lookahead_time, gain (servoj in tool space)      */
-  URT_CTRL_SERVOC,            /* pose[6], a, v, r                                           */
+  URT_CTRL_SERVOC,            /* pose[6], a, v, r (r treated as 0)                          */
   URT_CTRL_TORQUE,            /* tau[6] joint torques [N m]; index 1: compensate friction    */
-  URT_CTRL_FREEDRIVE,         /* index 1: enter teach mode (q[6] = 1 for free axes), 0: end  */
+  URT_CTRL_FREEDRIVE,         /* index 1: enter teach mode; q[6] = free axes x y z rx ry rz
+                                 (1 free, 0 held) of the feature frame pose[6] (base frame;
+                                 zeros: the base); index 0: end and hold where the arm is    */
   URT_CTRL_FORCE_MODE,        /* pose = task frame, q = selection (0/1), tau = wrench,
-                                 index = type (1..3), qd = limits (speeds / deviations)      */
+                                 index = type (1..3), qd = limits (speeds [m/s, rad/s] of the
+                                 compliant axes / deviations [m, rad] of the others); not a
+                                 motion: a following SPEEDL runs inside it                    */
   URT_CTRL_FORCE_MODE_END     /* leave force mode                                           */
 } urt_ctrl_cmd_kind_t;
 
@@ -185,6 +192,15 @@ typedef struct urt_ctrl {
   urt_ctrl_cmd_t pending;     /* movej/movel waiting for the arm to stop (has_pending)  */
   int has_pending;
   double temperature[URT_NJ]; /* motor winding temperature (thermal model)  [°C]  */
+
+  /* added for pause, gravity, torque control, freedrive and force mode (core/controller.cpp) */
+  int32_t paused;             /* 1 from PAUSE to RESUME (or PROGRAM_STATE STOPPED)        */
+  double pause_scale;         /* [0..1] the pause's factor on planned-motion time, slewed  */
+  uint32_t torque_mask;       /* joints whose drives run in torque mode (bit j)           */
+  uint32_t torque_mask_last;  /* the mask the last period's set-points carried            */
+  double gravity[3];          /* the controller's gravity (SET_GRAVITY), base  [m/s²]     */
+  int32_t force_mode;         /* 1 while force mode is on                                 */
+  urt_ctrl_cmd_t force;       /* its parameters: the last FORCE_MODE                      */
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or

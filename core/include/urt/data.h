@@ -51,12 +51,17 @@ enum {
 };
 
 /* One joint command, valid from the current step on. Within a step the set-point follows
- * q(t) = q + q̇ s + q̈ s²/2 (s = time since the step began), which the integrator differentiates. */
+ * q(t) = q + q̇ s + q̈ s²/2 (s = time since the step began), which the integrator differentiates.
+ * A joint whose bit is set in torque_mask is torque-controlled: its drive's position and speed
+ * loops are off (ξ_v held), the current reference is tau_ff/(k_t τ) clamped to ±i_max, and
+ * q, q̇ only pass the command checks (q̈ stays the other joints' estimate of its acceleration).
+ * Zero the whole struct before filling it. */
 typedef struct urt_command {
   double q[URT_NJ];        /* position set-point            [rad]    */
   double qd[URT_NJ];       /* velocity feed-forward         [rad/s]  */
   double qdd[URT_NJ];      /* acceleration                  [rad/s²] */
   double tau_ff[URT_NJ];   /* output-torque feed-forward    [N m]    */
+  uint32_t torque_mask;    /* bit j: joint j in torque mode (0: all position-controlled) */
 } urt_command_t;
 
 typedef struct urt_data {
@@ -88,7 +93,8 @@ typedef struct urt_data {
 
   /* status */
   uint32_t pstop;                    /* URT_PSTOP_* bits; 0 when running        */
-  uint32_t isat_count, vsat_count;   /* steps that began with a saturated loop  */
+  uint32_t isat_count, vsat_count;   /* steps that began with a saturated loop (a torque-mode
+                                      * joint counts in isat_count: i_ref is held)  */
   uint32_t refined_count;            /* steps redone as sub-steps (urt_step)    */
 } urt_data_t;
 

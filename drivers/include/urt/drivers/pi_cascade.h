@@ -10,6 +10,10 @@
  *   V_sup   = sat_{±V_net}( P_cur e_c + I_cur ξ_c )            [V]   averaged PWM, §1.3
  *   ξ̇_c     = e_c, held likewise while V_sup is saturated
  *
+ * Torque mode (in.torque = 1): i_ref = sat_{±i_max}(i_ff) and ξ̇_v = 0 — the position and speed
+ * loops are off, the current loop makes the commanded torque; ξ_v keeps its value for the return
+ * to position control.
+ *
  * P_pos [1/s] maps the joint-side position error to a motor-speed reference: τ is not applied
  * a second time (model.md §0.2). States: (ξ_v, ξ_c).
  */
@@ -44,6 +48,7 @@ typedef struct urt_pi_cascade_in {
   double q_fb;    /* joint encoder measurement          [rad]   */
   double qdm_fb;  /* motor speed measurement            [rad/s] */
   double i_fb;    /* current measurement                [A]     */
+  int torque;     /* 1: torque mode (position and speed loops off)  */
 } urt_pi_cascade_in_t;
 
 typedef struct urt_pi_cascade_out {
