@@ -1,0 +1,338 @@
+# SPDX-License-Identifier: Apache-2.0
+"""ur_rtde 1.6.5's RTDEControlInterface, unmodified, against a urtwin process: its ~50 kB
+rtde_control script is recognised on 30003 and run natively. The arm's motion is judged on the
+30003 stream; dynamics getters against the core's own functions (through liburtwin.so).
+Numbers are printed (pytest -s)."""
+
+import math
+import os
+import threading
+import time
+
+import pytest
+
+import urtwin_ctypes as urt
+from urtwin_proc import Emulator, RtReader, URTWIN
+
+rtde_control = pytest.importorskip("rtde_control")
+rtde_receive = pytest.importorskip("rtde_receive")
+pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+
+# the version whose pruned script keeps every command (direct torque and the dynamics getters
+# exist from 5.23; ur_rtde removes them from the script it sends to older controllers)
+FULL = "5.23"
+
+
+class Stream:
+    """Every 30003 packet, on a thread; also checks the period never breaks."""
+
+    def __init__(self, host, period=0.002):
+        self.period, self.packets, self.stop = period, [], threading.Event()
+        self.rt = RtReader(host)
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        while not self.stop.is_set():
+            self.packets.append(self.rt.read_decoded())
+
+    def since(self, t):
+        return [p for p in list(self.packets) if p["time"] >= t]
+
+    def latest(self):
+        return self.packets[-1]
+
+    def irregular(self):
+        ts = [p["time"] for p in self.packets]
+        return sum(1 for a, b in zip(ts, ts[1:]) if round((b - a) / self.period) != 1)
+
+    def close(self):
+        self.stop.set()
+        self.thread.join(timeout=2)
+        self.rt.close()
+
+
+class RtdeStream:
+    """Another RTDE client at 500 Hz beside ur_rtde's (clean-room client): counts breaks."""
+
+    def __init__(self, host):
+        from rtde_client import RtdeClient
+        self.c = RtdeClient(host).connect()
+        self.c.negotiate_protocol_version(2)
+        self.c.setup_outputs(["timestamp", "actual_q"], frequency=500)
+        self.c.start()
+        self.ts, self.stop = [], threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        while not self.stop.is_set():
+            self.ts.append(self.c.receive().values["timestamp"])
+
+    def irregular(self):
+        return sum(1 for a, b in zip(self.ts, self.ts[1:]) if round((b - a) / 0.002) != 1)
+
+    def close(self):
+        self.stop.set()
+        self.thread.join(timeout=2)
+        self.c.close()
+
+
+@pytest.fixture(scope="module")
+def ur5_model():
+    lib = urt.load_library()
+    with urt.Model(lib, urt.UR5_YAML) as m:
+        yield m
+
+
+@pytest.mark.parametrize("version", ["5.19", "3.15", FULL])
+def test_constructor_is_fast_and_the_script_runs(version):
+    with Emulator(version=version) as emu:
+        t0 = time.monotonic()
+        c = rtde_control.RTDEControlInterface(emu.host)
+        took = time.monotonic() - t0
+        running = c.isProgramRunning()
+        c.stopScript()
+        c.disconnect()
+    print(f"\n{version}: RTDEControlInterface constructor {took * 1000:.0f} ms, running {running}")
+    assert took < 1.0 and running
+
+
+def trapezoid_time(dist, a, v):
+    return 2 * math.sqrt(dist / a) if dist * a < v * v else dist / v + v / a
+
+
+def test_movej_movel_ik_fk():
+    with Emulator() as emu:
+        s = Stream(emu.host)
+        other = RtdeStream(emu.host)
+        c = rtde_control.RTDEControlInterface(emu.host)
+        time.sleep(0.05)
+        q0 = s.latest()["q_actual"]
+        target = list(q0)
+        target[1] += math.radians(30)
+        t0 = time.monotonic()
+        assert c.moveJ(target, 1.05, 1.4)
+        took = time.monotonic() - t0
+        err_j = max(abs(a - b) for a, b in zip(s.latest()["q_actual"], target))
+        ideal = trapezoid_time(math.radians(30), 1.4, 1.05)
+
+        # moveL 10 cm along x; the deviation from the line is read off 30003
+        p0 = s.latest()["tool_vector_actual"]
+        goal = list(p0)
+        goal[0] += 0.10
+        t_start = s.latest()["time"]
+        assert c.moveL(goal, 0.25, 1.2)
+        time.sleep(0.2)
+        track = [p["tool_vector_actual"] for p in s.since(t_start)]
+        end = s.latest()["tool_vector_actual"]
+        err_l = math.dist(end[:3], goal[:3])
+        dev = max(math.hypot(p[1] - p0[1], p[2] - p0[2]) for p in track)
+
+        # ur_rtde 1.6.5 quirks, as against a real controller: getForwardKinematics(q) sends only
+        # d0..d5 while its script reads the TCP offset from d6..d11, whatever the last command
+        # left there (a moveL's speed and acceleration, a qnear); getForwardKinematics(q, tcp)
+        # sends 12 doubles on its 6-double recipe, which the controller drops (the call then
+        # waits 300 s). poseTrans writes d0..d11, so zeros there first make FK(q) exact.
+        rt = 0.0
+        for q in (s.latest()["q_actual"], [0.4, -1.1, 1.3, -1.9, -1.4, 0.7],
+                  [-1.0, -2.0, -1.2, -1.2, 1.6, -2.0]):
+            c.poseTrans([0.0] * 6, [0.0] * 6)
+            fk = c.getForwardKinematics(q)
+            ik = c.getInverseKinematics(fk, q)
+            rt = max(rt, max(abs(a - b) for a, b in zip(ik, q)))
+        c.stopScript()
+        c.disconnect()
+        s.close()
+        other.close()
+    print(f"\nmoveJ 30 deg: returned after {took:.3f} s (trapezoid {ideal:.3f} s, "
+          f"{100 * (took / ideal - 1):+.1f} %), error {err_j:.2e} rad; moveL 10 cm: end error "
+          f"{err_l * 1e3:.4f} mm, max deviation from the line {dev * 1e3:.4f} mm; IK(FK(q)) "
+          f"round trip {rt:.2e} rad; irregular steps: 30003 {s.irregular()}, other RTDE client "
+          f"{other.irregular()} of {len(other.ts)}")
+    assert abs(took / ideal - 1) <= 0.10 and err_j < 1e-4
+    assert err_l < 1e-4 and dev < 1e-4
+    assert rt < 1e-9
+    assert s.irregular() == 0 and other.irregular() == 0 and len(other.ts) > 1000
+
+
+def test_servoj_sine_then_servo_stop():
+    period, lookahead, gain = 0.002, 0.1, 300
+    amp, freq = 0.2, 0.5
+    with Emulator() as emu:
+        s = Stream(emu.host)
+        other = RtdeStream(emu.host)
+        c = rtde_control.RTDEControlInterface(emu.host)
+        time.sleep(0.05)
+        q0 = s.latest()["q_actual"]
+        sent = []  # (controller time at send, commanded base angle)
+        t_first = None
+        for k in range(int(5.0 / period)):
+            t_cycle = c.initPeriod()
+            q = list(q0)
+            q[0] = q0[0] + amp * math.sin(2 * math.pi * freq * k * period)
+            c.servoJ(q, 0.5, 0.5, period, lookahead, gain)
+            c.waitPeriod(t_cycle)
+        c.servoStop()
+        time.sleep(1.0)
+        rest = max(abs(v) for v in s.latest()["qd_actual"])
+        c.stopScript()
+        c.disconnect()
+        s.close()
+        other.close()
+    # the lag that best aligns the actual base angle with the commanded sine (skip the start)
+    packets = [p for p in s.packets if abs(p["q_target"][0] - q0[0]) > 1e-9]
+    t0 = packets[0]["time"]
+    mid = [p for p in packets if 1.5 < p["time"] - t0 < 4.0]
+    best = min(((lag, max(abs(p["q_actual"][0] - q0[0] - amp * math.sin(
+        2 * math.pi * freq * (p["time"] - t0 - lag))) for p in mid))
+        for lag in (i * period for i in range(0, 150))), key=lambda x: x[1])
+    print(f"\nservoJ 0.5 Hz sine streamed by ur_rtde: lag {best[0] * 1e3:.0f} ms (bound "
+          f"{(lookahead + 2 * period) * 1e3:.0f} ms), residual {best[1]:.2e} rad; after servoStop "
+          f"|qd| {rest:.2e} rad/s; irregular steps: 30003 {s.irregular()}, other RTDE client "
+          f"{other.irregular()} of {len(other.ts)}")
+    assert best[0] <= lookahead + 2 * period + 1e-9
+    assert rest < 1e-3
+    assert s.irregular() == 0 and other.irregular() == 0 and len(other.ts) > 2500
+
+
+def test_speedj_one_second_then_speed_stop():
+    with Emulator() as emu:
+        s = Stream(emu.host)
+        c = rtde_control.RTDEControlInterface(emu.host)
+        time.sleep(0.05)
+        q0 = s.latest()["q_actual"]
+        qd = [0.2, 0.0, 0.0, 0.0, 0.0, -0.3]
+        a = 10.0  # ramps of 0.03 s: what the ramp up loses, the ramp down at the same rate gives back
+        t_cmd = s.latest()["time"]
+        t0 = time.monotonic()
+        assert c.speedJ(qd, a, 0.0)
+        while time.monotonic() - t0 < 1.0:
+            time.sleep(0.001)
+        c.speedStop(a)
+        t_stop = s.latest()["time"]
+        time.sleep(0.5)
+        q1 = s.latest()["q_actual"]
+        rest = max(abs(v) for v in s.latest()["qd_actual"])
+        c.stopScript()
+        c.disconnect()
+        s.close()
+    # commanded amount: the ramp up at a, cruise, and the ramp down at 10 rad/s^2 (leading joint)
+    span = [p for p in s.packets if any(abs(v) > 1e-9 for v in p["qd_target"])]
+    dur = span[-1]["time"] - span[0]["time"]
+    moved = [b - a for a, b in zip(q0, q1)]
+    # the same velocity profile, integrated from the target speeds the controller produced
+    integral = [sum(p["qd_target"][j] for p in span) * 0.002 for j in range(6)]
+    err = max(abs(m / i - 1) for m, i in zip(moved, integral) if abs(i) > 1e-3)
+    # commanded: the speeds for the time between the speedJ and the speedStop calls (as the
+    # controller clock saw them)
+    expected_cruise = [v * (t_stop - t_cmd) for v in qd]
+    print(f"\nspeedJ for {t_stop - t_cmd:.3f} s: moved {moved[0]:.4f}, {moved[5]:.4f} rad "
+          f"(commanded {expected_cruise[0]:.4f}, {expected_cruise[5]:.4f}: "
+          f"{100 * (moved[0] / expected_cruise[0] - 1):+.2f} %, "
+          f"{100 * (moved[5] / expected_cruise[5] - 1):+.2f} %); the target-speed profile "
+          f"integrates to the motion within {100 * err:.2f} %; after speedStop |qd| {rest:.2e} rad/s")
+    assert abs(moved[0] / expected_cruise[0] - 1) < 0.05
+    assert abs(moved[5] / expected_cruise[5] - 1) < 0.05
+    assert rest < 1e-3
+
+
+def test_dynamics_getters_equal_the_core(ur5_model):
+    """getJacobian() and getMassMatrix() are the core's own functions at the actual q of the
+    tick that served them. ur_rtde's script calls get_jacobian() and get_mass_matrix() without
+    arguments (it ignores a q given to the client), so the reference is the core evaluated at
+    the 30003 q of each tick around the call; the closest must agree to rounding."""
+    import numpy as np
+    with Emulator(version=FULL) as emu:
+        s = Stream(emu.host)
+        c = rtde_control.RTDEControlInterface(emu.host)
+        time.sleep(0.05)
+        t0 = s.latest()["time"]
+        J = np.array(c.getJacobian()).reshape(6, 6).T  # the script writes column by column
+        M = np.array(c.getMassMatrix()).reshape(6, 6).T
+        time.sleep(0.02)
+        around = s.since(t0 - 0.01)
+        c.stopScript()
+        c.disconnect()
+        s.close()
+    errJ = min(np.abs(J - ur5_model.jacobian(p["q_actual"])).max() for p in around)
+    errM = min(np.abs(M - ur5_model.mass_matrix(p["q_actual"])).max() for p in around)
+    print(f"\ngetJacobian vs core at the tick's q: max |diff| {errJ:.2e}; getMassMatrix: {errM:.2e}")
+    assert errJ < 1e-12 and errM < 1e-12
+
+
+def test_direct_torque_with_gravity_holds_still(ur5_model):
+    with Emulator(version=FULL) as emu:
+        s = Stream(emu.host)
+        c = rtde_control.RTDEControlInterface(emu.host)
+        time.sleep(0.05)
+        q0 = s.latest()["q_actual"]
+        t_end = time.monotonic() + 2.0
+        drift = 0.0
+        while time.monotonic() < t_end:
+            t_cycle = c.initPeriod()
+            q = s.latest()["q_actual"]
+            g = list(ur5_model.gravity(q))
+            c.directTorque(g, [0.0] * 6, [0.0] * 6)
+            drift = max(drift, max(abs(a - b) for a, b in zip(q, q0)))
+            c.waitPeriod(t_cycle)
+        mode = s.latest()
+        c.stopScript()
+        c.disconnect()
+        s.close()
+    print(f"\ndirectTorque(g(q)) for 2 s: max drift {drift:.2e} rad")
+    assert drift < 1e-3
+
+
+def test_watchdog_stops_the_program_and_the_arm():
+    with Emulator() as emu:
+        s = Stream(emu.host)
+        c = rtde_control.RTDEControlInterface(emu.host)
+        assert c.setWatchdog(10.0)
+        t_end = time.monotonic() + 0.5
+        while time.monotonic() < t_end:  # kicked at 50 Hz: keeps running
+            c.kickWatchdog()
+            time.sleep(0.02)
+        assert c.isProgramRunning()
+        q = s.latest()["q_actual"]
+        target = list(q)
+        target[0] += 0.5
+        c.moveJ(target, 0.5, 1.0, True)  # an asynchronous move, then no more kicks
+        t_last_kick = s.latest()["time"]
+        time.sleep(0.6)
+        stopped = [p for p in s.since(t_last_kick) if p["program_state"] != 2]
+        t_stop = stopped[0]["time"] - t_last_kick if stopped else None
+        time.sleep(1.0)
+        rest = max(abs(v) for v in s.latest()["qd_actual"])
+        running = c.isProgramRunning()
+        c.disconnect()
+        s.close()
+    print(f"\nwatchdog 10 Hz: program stopped {t_stop * 1e3:.0f} ms after the last kick "
+          f"(bound 1/f + 0.1 s); arm |qd| {rest:.2e} rad/s afterwards")
+    assert t_stop is not None and t_stop <= 0.1 + 0.1
+    assert not running and rest < 1e-3
+
+
+def test_stop_script_and_reupload():
+    with Emulator() as emu:
+        s = Stream(emu.host)
+        c = rtde_control.RTDEControlInterface(emu.host)
+        t0 = s.latest()["time"]
+        c.stopScript()
+        t_ret = s.latest()["time"]
+        time.sleep(0.1)
+        stopped = [p for p in s.since(t0) if p["program_state"] != 2]
+        dt = stopped[0]["time"] - t0
+        t_up = time.monotonic()
+        assert c.reuploadScript()
+        running = False
+        while not running and time.monotonic() - t_up < 2.0:  # reuploadScript does not wait
+            running = c.isProgramRunning()
+            time.sleep(0.005)
+        t_up = time.monotonic() - t_up
+        c.stopScript()
+        c.disconnect()
+        s.close()
+    print(f"\nstopScript: program stopped {dt * 1e3:.0f} ms of controller time after the call; "
+          f"reuploadScript: running again after {t_up * 1e3:.0f} ms")
+    assert dt <= 0.05 and running
