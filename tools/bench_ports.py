@@ -4,8 +4,8 @@
 
 Starts build/tools/urtwin (20 kHz physics, tick pacing, e-Series 500 Hz) twice — as a plain
 process, then with --rt-priority 80 --lock-memory (SCHED_FIFO + mlockall, when permitted) —
-connects 8 clients to port 30003 with build/tools/urt_rtprobe for --seconds (default 60) each
-time, and reports:
+connects 8 clients to port 30003 with build/tools/urt_rtprobe for --seconds (default 60), then
+9 RTDE clients at 500 Hz (one measured, 8 others: all are timed) for as long, and reports:
   - the inter-packet period the clients see (p50/p99/p99.9/max over all 8 clients),
   - packets received and gaps in the controller timestamps,
   - physics overruns and missed periods the emulator counted over its whole run,
@@ -66,6 +66,16 @@ def run_once(args, build, extra):
             print(f"bench_ports.py: urt_rtprobe failed: {err}", file=sys.stderr)
             return None
         seen = json.loads(out)
+        # then RTDE: one client measured with 8 others connected (9 streams, all timed)
+        rtde = subprocess.run(
+            [str(build / "tools" / "urt_rtprobe"), "--host", args.host, "--rtde",
+             "--port", str(30004 + args.port_offset), "--clients", str(args.clients + 1),
+             "--seconds", str(args.seconds)],
+            capture_output=True, text=True, timeout=args.seconds + 30)
+        if rtde.returncode != 0:
+            print(f"bench_ports.py: urt_rtprobe --rtde failed: {rtde.stderr}", file=sys.stderr)
+            return None
+        seen_rtde = json.loads(rtde.stdout)
     finally:
         emu.send_signal(signal.SIGTERM)
         _, emu_err = emu.communicate(timeout=10)
@@ -74,6 +84,7 @@ def run_once(args, build, extra):
         "options": extra,
         "warnings": [l for l in emu_err.splitlines() if "warning" in l],
         "rt_clients": seen,
+        "rtde_clients": seen_rtde,
         "emulator": {
             "ticks": int(m.group(1)) if m else None,
             "overruns": int(m.group(2)) if m else None,
@@ -105,6 +116,11 @@ def main(argv=None):
               f"{seen['packets']} packets, {seen['timestamp_gaps']} timestamp gaps; inter-packet "
               f"period p50 {iv['p50']:.0f} us, p99 {iv['p99']:.0f} us, p99.9 {iv['p99_9']:.0f} us, "
               f"max {iv['max']:.0f} us")
+        sr, ivr = res["rtde_clients"], res["rtde_clients"]["interval_us"]
+        print(f"[{name}] RTDE 500 Hz with {sr['clients']} clients for {args.seconds:.0f} s: "
+              f"{sr['packets']} packages, {sr['timestamp_gaps']} timestamp gaps; inter-package "
+              f"period p50 {ivr['p50']:.0f} us, p99 {ivr['p99']:.0f} us, p99.9 "
+              f"{ivr['p99_9']:.0f} us, max {ivr['max']:.0f} us")
         print(f"[{name}] urtwin: {e['ticks']} ticks, {e['overruns']} physics overruns, "
               f"{e['missed_periods']} missed periods; resident {e['vm_rss_kib'] / 1024:.1f} MiB"
               + "".join(f"; {w}" for w in res["warnings"]))
