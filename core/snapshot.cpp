@@ -176,6 +176,28 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
       s->elbow_vel[k] = v[k];
     }
   }
+  // linear momentum of the arm: Σ m_j v_j over the links' centres of mass, their velocities by
+  // a central difference of the CoM positions along q̇ (h·|q̇| ≈ 1e-7 rad: error ~1e-9 relative)
+  {
+    const double h = 1e-7;
+    double qp[URT_NJ], qm[URT_NJ], Tp[16], Tm[16];
+    for (int j = 0; j < URT_NJ; j++) {
+      qp[j] = q_true[j] + h * qd_true[j];
+      qm[j] = q_true[j] - h * qd_true[j];
+    }
+    Vec3 P = Vec3::Zero();
+    for (int j = 0; j < URT_NJ; j++) {
+      const urt_link_params_t& l = m->arm.link[j];
+      urt_arm_frame(m, qp, j + 1, Tp);
+      urt_arm_frame(m, qm, j + 1, Tm);
+      for (int k = 0; k < 3; k++) {
+        double cp = Tp[4 * k] * l.com[0] + Tp[4 * k + 1] * l.com[1] + Tp[4 * k + 2] * l.com[2] + Tp[4 * k + 3];
+        double cm = Tm[4 * k] * l.com[0] + Tm[4 * k + 1] * l.com[1] + Tm[4 * k + 2] * l.com[2] + Tm[4 * k + 3];
+        P[k] += l.mass * (cp - cm) / (2.0 * h);
+      }
+    }
+    s->momentum = P.norm();
+  }
   s->payload_mass = c->payload_mass;
   std::memcpy(s->payload_cog, c->payload_cog, sizeof s->payload_cog);
 

@@ -57,7 +57,7 @@ size_t urt_rt_packet_encode(const urt_version_t *v, const urt_snapshot_t *s, uin
   urt_be_put_f64v(&w, s->tool_accel, 3);
   urt_be_put_zeros(&w, 6 * 8);
   urt_be_put_f64(&w, s->speed_scaling);
-  urt_be_put_f64(&w, 0.0);
+  urt_be_put_f64(&w, s->momentum);
   urt_be_put_zeros(&w, 2 * 8);
 
   // power (972 … 1044)

@@ -46,6 +46,7 @@ typedef struct urt_snapshot {
   double elbow_pos[3], elbow_vel[3];  /* elbow joint: origin of DH frame 2 (on the axis of
                                        * joint 3, the elbow), base frame [m, m/s] */
   double payload_mass, payload_cog[3];
+  double momentum;            /* norm of the arm's linear momentum Σ m v_CoM [kg m/s]  */
 
   /* power */
   double v_main, v_robot, i_robot;  /* 48 V supply, robot current           [V, A]   */

@@ -59,8 +59,8 @@ enum {
 /* Encode the real-time packet of version v from snapshot s into buf: exactly
  * urt_version_rt_packet_size(v) bytes, every field of protocols.md §1.2 that the version has.
  * Digital bits are sent as doubles whose value is the bit mask; "controller timer" is
- * s->exec_time; reserved fields and the test value are 0; the linear momentum norm is
- * |m·v| of nothing we model, so 0.
+ * s->exec_time; reserved fields and the test value are 0; the linear momentum norm is the
+ * arm's (s->momentum).
  * Context: any (pure; no allocation).
  * Returns the number of bytes written, or 0 if cap is smaller than the packet (buf untouched
  * beyond cap). */
