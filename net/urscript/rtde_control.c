@@ -587,15 +587,17 @@ static int service_async(rc *R) {
 
 /* tool_contact(direction): ticks back to just before a contact along the direction's
  * translation started, or 0 without a contact. A contact is a resisting force (opposite to the
- * direction) above CONTACT_FORCE in the TCP force, which is zeroed by zero_ftsensor. */
+ * direction) above CONTACT_FORCE in the TCP force, which is zeroed by zero_ftsensor. An all-zero
+ * direction considers contacts from every direction (UR's tool_contact): the force's size. */
 static int tool_contact(rc *R, const double dir[6]) {
   double n = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-  if (n < 1e-12 || R->hist_n == 0) return 0;
+  if (R->hist_n == 0) return 0;
   uint64_t avail = R->hist_n < HIST ? R->hist_n : HIST;
   int steps = 0;
   for (uint64_t k = 0; k < avail; k++) {
     const double *f = R->hist_f[(R->hist_n - 1 - k) % HIST];
-    double resist = -(f[0] * dir[0] + f[1] * dir[1] + f[2] * dir[2]) / n;
+    double resist = n < 1e-12 ? sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2])
+                              : -(f[0] * dir[0] + f[1] * dir[1] + f[2] * dir[2]) / n;
     if (k == 0 && resist <= CONTACT_FORCE) return 0;
     if (resist <= CONTACT_ONSET) break;
     steps = (int)k + 1;

@@ -209,8 +209,8 @@ def test_speedj_one_second_then_speed_stop():
         assert c.speedJ(qd, a, 0.0)
         while time.monotonic() - t0 < 1.0:
             time.sleep(0.001)
-        c.speedStop(a)
         t_stop = s.latest()["time"]
+        c.speedStop(a)
         time.sleep(0.5)
         q1 = s.latest()["q_actual"]
         rest = max(abs(v) for v in s.latest()["qd_actual"])
@@ -336,3 +336,95 @@ def test_stop_script_and_reupload():
     print(f"\nstopScript: program stopped {dt * 1e3:.0f} ms of controller time after the call; "
           f"reuploadScript: running again after {t_up * 1e3:.0f} ms")
     assert dt <= 0.05 and running
+
+
+def test_custom_script_function_then_the_control_script_again():
+    with Emulator() as emu:
+        c = rtde_control.RTDEControlInterface(emu.host)
+        t0 = time.monotonic()
+        ok = c.sendCustomScriptFunction("urtwin_custom", 'textmsg("custom function ran")\n'
+                                        "set_standard_digital_out(5, True)\n")
+        took = time.monotonic() - t0
+        s = Stream(emu.host)
+        time.sleep(0.05)
+        do5 = int(s.latest()["digital_outputs"]) >> 5 & 1
+        t_up = time.monotonic()
+        while not c.isProgramRunning() and time.monotonic() - t_up < 2.0:
+            time.sleep(0.005)
+        running = c.isProgramRunning()
+        c.stopScript()
+        c.disconnect()
+        s.close()
+    print(f"\nsendCustomScriptFunction: {ok} after {took * 1e3:.0f} ms, DO5 {do5}, control script "
+          f"running again: {running}")
+    assert ok and do5 == 1 and running
+
+
+def test_second_control_interface_replaces_the_first():
+    with Emulator() as emu:
+        s = Stream(emu.host)
+        a = rtde_control.RTDEControlInterface(emu.host)
+        a.disconnect()  # as on a real controller, a's script keeps playing
+        assert s.latest()["program_state"] == 2
+        t0 = time.monotonic()
+        b = rtde_control.RTDEControlInterface(emu.host)  # stops that script, dashboard stop, re-uploads
+        took = time.monotonic() - t0
+        q = s.latest()["q_actual"]
+        target = list(q)
+        target[5] += 0.2
+        assert b.moveJ(target, 1.0, 1.0)
+        err = max(abs(x - y) for x, y in zip(s.latest()["q_actual"], target))
+        b.stopScript()
+        b.disconnect()
+        s.close()
+    print(f"\nsecond RTDEControlInterface: constructor {took * 1e3:.0f} ms, its moveJ error {err:.1e} rad")
+    assert took < 1.0 and err < 1e-4
+
+
+def test_remote_control_is_checked_for_non_local_hosts():
+    with Emulator("--local-control") as emu:  # a 127.0.0.N address: ur_rtde asks the dashboard
+        with pytest.raises(RuntimeError) as e:
+            rtde_control.RTDEControlInterface(emu.host)
+    print(f"\nlocal control: {e.value}")
+    assert "remote control" in str(e.value).lower()
+
+
+def test_move_until_contact_against_a_wall_given_through_rtde():
+    """The 'wall': another RTDE client writes external_force_torque (the world pushing back on
+    the tool) once the TCP has gone 2 cm down; moveUntilContact stops on it. ur_rtde runs with
+    FLAG_NO_EXT_FT, or its own recipe would hold that input (IN_USE for anyone else)."""
+    from rtde_client import RtdeClient
+    with Emulator() as emu:
+        s = Stream(emu.host)
+        C = rtde_control.RTDEControlInterface
+        c = C(emu.host, 500.0, C.FLAG_UPLOAD_SCRIPT | C.FLAG_NO_EXT_FT)
+        wall = RtdeClient(emu.host).connect()
+        wall.negotiate_protocol_version(2)
+        recipe = wall.setup_inputs(["external_force_torque"])
+        z0 = s.latest()["tool_vector_actual"][2]
+        done = threading.Event()
+
+        def push():
+            while not done.is_set():
+                z = s.latest()["tool_vector_actual"][2]
+                f = 50.0 if z < z0 - 0.02 else 0.0  # a stiff wall 2 cm below the start
+                wall.send_inputs(recipe, {"external_force_torque": [0.0, 0.0, f, 0.0, 0.0, 0.0]})
+                time.sleep(0.002)
+
+        th = threading.Thread(target=push, daemon=True)
+        th.start()
+        t0 = time.monotonic()
+        ok = c.moveUntilContact([0.0, 0.0, -0.02, 0.0, 0.0, 0.0])
+        took = time.monotonic() - t0
+        time.sleep(0.3)
+        z = s.latest()["tool_vector_actual"][2]
+        done.set()
+        th.join(timeout=1)
+        c.stopScript()
+        c.disconnect()
+        wall.close()
+        s.close()
+    print(f"\nmoveUntilContact: returned {ok} after {took:.2f} s; TCP went {1e3 * (z0 - z):.1f} mm "
+          f"down (wall at 20 mm)")
+    assert ok and took < 5.0
+    assert 0.015 < z0 - z < 0.03
