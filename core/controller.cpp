@@ -881,25 +881,15 @@ void tick_thermal(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d) noex
 
 void tcp_kinematics(const urt_arm_params_t& a, const double tcp[6], const Vec6& q, Mat3& R_BT,
                     Vec3& p_BT, Mat6* J) noexcept {
-  ArmKinematics k;
-  arm_kinematics(a, q, k);
   Vec3 z[URT_NJ], o[URT_NJ];
-  Mat3 R = Mat3::Identity();
-  Vec3 p = Vec3::Zero();
-  for (int j = 0; j < URT_NJ; ++j) {
-    z[j] = R.col(2);
-    o[j] = p;
-    p += R * k.p_PC[j];
-    R = R * k.R_PC[j];
-  }
+  Mat3 R;
+  Vec3 p;
+  joint_axes(a, q, z, o, R, p);
   const Vec3 p_FT(tcp[0], tcp[1], tcp[2]);
   R_BT = R * rotation_from_rotvec(Vec3(tcp[3], tcp[4], tcp[5]));
   p_BT = p + R * p_FT;
   if (J) {
-    for (int j = 0; j < URT_NJ; ++j) {
-      J->block<3, 1>(0, j) = z[j].cross(p_BT - o[j]);
-      J->block<3, 1>(3, j) = z[j];
-    }
+    point_jacobian(z, o, p_BT, *J);
   }
 }
 
