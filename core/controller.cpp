@@ -391,14 +391,30 @@ void refuse(urt_ctrl_t* c, const urt_ctrl_cmd_t* cmd, uint32_t fault) noexcept {
   mark_done(c, cmd->id);
 }
 
-double tcp_twist_decel_time(const urt_model_t* m, const urt_ctrl_t* c, double a,
-                            double a_rot) noexcept {
+// the TCP twist (v; ω) of the set-point q1, qd1, base frame
+Vec6 setpoint_twist(const urt_model_t* m, const urt_ctrl_t* c) noexcept {
   Mat3 R;
   Vec3 p;
   Mat6 J;
   tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R, p, &J);
-  Vec6 x = J * vec6(c->qd1);
+  return J * vec6(c->qd1);
+}
+
+double tcp_twist_decel_time(const urt_model_t* m, const urt_ctrl_t* c, double a,
+                            double a_rot) noexcept {
+  Vec6 x = setpoint_twist(m, c);
   return std::fmax(x.head<3>().norm() / a, x.tail<3>().norm() / a_rot);
+}
+
+// start servoing to the joint target q (servoj, and servol on its IK); a command without a
+// time lasts one period
+void start_servoj(urt_ctrl_t* c, Plan& p, const double* q, urt_ctrl_motion_t motion) noexcept {
+  std::memcpy(p.servoj.target, q, sizeof p.servoj.target);
+  p.servoj.since = 0.0;
+  if (!(c->active.t > 0.0)) {
+    c->active.t = c->period;
+  }
+  c->motion = motion;
 }
 
 // start decelerating every joint to rest, all together, the leading one at a
@@ -1309,12 +1325,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         }
         break;
       case URT_CTRL_SERVOJ:
-        std::memcpy(p.servoj.target, cmd->q, sizeof p.servoj.target);
-        p.servoj.since = 0.0;
-        if (!(c->active.t > 0.0)) {
-          c->active.t = c->period;
-        }
-        c->motion = URT_MOTION_SERVOJ;
+        start_servoj(c, p, cmd->q, URT_MOTION_SERVOJ);
         break;
       case URT_CTRL_SPEEDJ: {
         double dmax = 0.0;
@@ -1329,16 +1340,11 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         c->motion = URT_MOTION_SPEEDJ;
         break;
       }
-      case URT_CTRL_SPEEDL: {
-        Mat3 R;
-        Vec3 pos;
-        Mat6 J;
-        tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R, pos, &J);
-        put6(J * vec6(c->qd1), p.speedl.xd);
+      case URT_CTRL_SPEEDL:
+        put6(setpoint_twist(m, c), p.speedl.xd);
         std::memcpy(p.speedl.xd_goal, cmd->pose, sizeof p.speedl.xd_goal);
         c->motion = URT_MOTION_SPEEDL;
         break;
-      }
       case URT_CTRL_STOPJ:
         start_stop(c, p, joint_stop_time(c, cmd->a));
         break;
@@ -1352,20 +1358,11 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         break;
       case URT_CTRL_SERVOL:
         // servoj on the joint target of the pose (IK from the set-point, once per command)
-        std::memcpy(p.servoj.target, qg, sizeof p.servoj.target);
-        p.servoj.since = 0.0;
-        if (!(c->active.t > 0.0)) {
-          c->active.t = c->period;
-        }
-        c->motion = URT_MOTION_SERVOL;
+        start_servoj(c, p, qg, URT_MOTION_SERVOL);
         break;
       case URT_CTRL_SERVOC:
         if (prev_motion != URT_MOTION_SERVOC) {
-          Mat3 R;
-          Vec3 pos;
-          Mat6 J;
-          tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R, pos, &J);
-          put6(J * vec6(c->qd1), p.servoc.xd);
+          put6(setpoint_twist(m, c), p.servoc.xd);
         }
         std::memcpy(p.servoc.target, cmd->pose, sizeof p.servoc.target);
         c->motion = URT_MOTION_SERVOC;
@@ -1530,11 +1527,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         if (!c->force_mode || c->motion != URT_MOTION_FORCE) {
           // force mode takes the motion generator over from the current set-point and twist;
           // a running speedl goes on inside it, any other motion is over
-          Mat3 R;
-          Vec3 pos;
-          Mat6 J;
-          tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R, pos, &J);
-          Vec6 xd = J * vec6(c->qd1);
+          Vec6 xd = setpoint_twist(m, c);
           Vec6 goal = Vec6::Zero();
           if (c->motion == URT_MOTION_SPEEDL) {
             goal = vec6(p.speedl.xd_goal);
