@@ -263,6 +263,18 @@ uint32_t speed_faults(const urt_model_t* m, const double* qd) noexcept {
   return 0;
 }
 
+uint32_t torque_faults(const urt_model_t* m, const double* tau) noexcept {
+  for (int j = 0; j < URT_NJ; j++) {
+    if (!std::isfinite(tau[j])) {
+      return URT_PSTOP_NONFINITE_CMD;
+    }
+    if (std::fabs(tau[j]) > m->joint[j].torque_max) {
+      return URT_PSTOP_TORQUE_LIMIT;
+    }
+  }
+  return 0;
+}
+
 bool is_motion(const urt_ctrl_cmd_t* cmd) noexcept {
   const int kind = cmd->kind;
   return (kind >= URT_CTRL_MOVEJ && kind <= URT_CTRL_DIRECT) || kind == URT_CTRL_SERVOL ||
@@ -1218,13 +1230,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         bad_target = all_finite(cmd->pose, 6) ? 0 : URT_PSTOP_NONFINITE_CMD;
         break;
       case URT_CTRL_TORQUE:
-        for (int j = 0; j < URT_NJ && !bad_target; j++) {
-          if (!std::isfinite(cmd->tau[j])) {
-            bad_target = URT_PSTOP_NONFINITE_CMD;
-          } else if (std::fabs(cmd->tau[j]) > m->joint[j].torque_max) {
-            bad_target = URT_PSTOP_TORQUE_LIMIT;
-          }
-        }
+        bad_target = torque_faults(m, cmd->tau);
         break;
       case URT_CTRL_FREEDRIVE:
         for (int j = 0; j < URT_NJ; j++) {
@@ -1237,12 +1243,8 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         if (!bad_target) {
           bad_target = speed_faults(m, cmd->qd);
         }
-        for (int j = 0; j < URT_NJ && !bad_target; j++) {
-          if (!std::isfinite(cmd->tau[j])) {
-            bad_target = URT_PSTOP_NONFINITE_CMD;
-          } else if (std::fabs(cmd->tau[j]) > m->joint[j].torque_max) {
-            bad_target = URT_PSTOP_TORQUE_LIMIT;
-          }
+        if (!bad_target) {
+          bad_target = torque_faults(m, cmd->tau);
         }
         break;
       default:
