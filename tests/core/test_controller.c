@@ -87,7 +87,6 @@ static void test_movej__trapezoid_time_and_settling_cb3(void **state) {
   movej_shoulder(0.008);
 }
 
-
 static void test_movel__straight_10_cm(void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
