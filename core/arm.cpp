@@ -147,29 +147,38 @@ void arm_frame(const urt_arm_params_t& a, const Vec6& q, int i, Mat3& R_BF, Vec3
   }
 }
 
-void jacobian(const urt_arm_params_t& a, const Vec6& q, Mat6& J) noexcept {
+void joint_axes(const urt_arm_params_t& a, const Vec6& q, Vec3 z[URT_NJ], Vec3 o[URT_NJ],
+                Mat3& R_B6, Vec3& p_B6) noexcept {
   ArmKinematics k;
   arm_kinematics(a, q, k);
 
   // joint j turns about ẑ of frame j through its origin; collect both in the base frame
-  Vec3 z[URT_NJ], o[URT_NJ];
-  Mat3 R = Mat3::Identity();
-  Vec3 p = Vec3::Zero();
+  R_B6.setIdentity();
+  p_B6.setZero();
   for (int j = 0; j < URT_NJ; ++j) {
-    z[j] = R.col(2);
-    o[j] = p;
-    p += R * k.p_PC[j];
-    R = R * k.R_PC[j];
+    z[j] = R_B6.col(2);
+    o[j] = p_B6;
+    p_B6 += R_B6 * k.p_PC[j];
+    R_B6 = R_B6 * k.R_PC[j];
   }
+}
+
+void point_jacobian(const Vec3 z[URT_NJ], const Vec3 o[URT_NJ], const Vec3& p, Mat6& J) noexcept {
+  for (int j = 0; j < URT_NJ; ++j) {
+    J.block<3, 1>(0, j) = z[j].cross(p - o[j]);
+    J.block<3, 1>(3, j) = z[j];
+  }
+}
+
+void jacobian(const urt_arm_params_t& a, const Vec6& q, Mat6& J) noexcept {
+  Vec3 z[URT_NJ], o[URT_NJ];
+  Mat3 R;
+  Vec3 p;
+  joint_axes(a, q, z, o, R, p);
   Mat3 R_FT;
   Vec3 p_FT;
   detail::tcp_offset(a, R_FT, p_FT);
-  const Vec3 p_tcp = p + R * p_FT;
-
-  for (int j = 0; j < URT_NJ; ++j) {
-    J.block<3, 1>(0, j) = z[j].cross(p_tcp - o[j]);
-    J.block<3, 1>(3, j) = z[j];
-  }
+  point_jacobian(z, o, p + R * p_FT, J);
 }
 
 //---- dynamics ----

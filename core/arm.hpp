@@ -52,6 +52,15 @@ void arm_frame(const urt_arm_params_t& a, const Vec6& q, int i, Mat3& R_BF, Vec3
 // Geometric Jacobian of the TCP in the base frame: rows (v; ω), v of the TCP point.
 void jacobian(const urt_arm_params_t& a, const Vec6& q, Mat6& J) noexcept;
 
+// The joint axes at q, in the base frame: joint j turns about z[j] (ẑ of frame j) through o[j]
+// (origin of frame j) [m]; R_B6, p_B6 is the flange pose (frame 6). With point_jacobian, what
+// every geometric Jacobian here is built from (the TCP offset is the caller's).
+void joint_axes(const urt_arm_params_t& a, const Vec6& q, Vec3 z[URT_NJ], Vec3 o[URT_NJ],
+                Mat3& R_B6, Vec3& p_B6) noexcept;
+
+// Geometric Jacobian of the point p (base frame) carried by the last link: rows (v; ω).
+void point_jacobian(const Vec3 z[URT_NJ], const Vec3 o[URT_NJ], const Vec3& p, Mat6& J) noexcept;
+
 // Joint torques of an external wrench (force; torque) [N, N m] applied at the TCP and given in
 // the base frame: τ = Jᵀ w, frozen over a step. All zero (no Jacobian) when w is zero.
 void wrench_torque(const urt_arm_params_t& a, const Vec6& q, const double w[6], Vec6& tau) noexcept;

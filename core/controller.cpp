@@ -263,6 +263,18 @@ uint32_t speed_faults(const urt_model_t* m, const double* qd) noexcept {
   return 0;
 }
 
+uint32_t torque_faults(const urt_model_t* m, const double* tau) noexcept {
+  for (int j = 0; j < URT_NJ; j++) {
+    if (!std::isfinite(tau[j])) {
+      return URT_PSTOP_NONFINITE_CMD;
+    }
+    if (std::fabs(tau[j]) > m->joint[j].torque_max) {
+      return URT_PSTOP_TORQUE_LIMIT;
+    }
+  }
+  return 0;
+}
+
 bool is_motion(const urt_ctrl_cmd_t* cmd) noexcept {
   const int kind = cmd->kind;
   return (kind >= URT_CTRL_MOVEJ && kind <= URT_CTRL_DIRECT) || kind == URT_CTRL_SERVOL ||
@@ -391,14 +403,30 @@ void refuse(urt_ctrl_t* c, const urt_ctrl_cmd_t* cmd, uint32_t fault) noexcept {
   mark_done(c, cmd->id);
 }
 
-double tcp_twist_decel_time(const urt_model_t* m, const urt_ctrl_t* c, double a,
-                            double a_rot) noexcept {
+// the TCP twist (v; ω) of the set-point q1, qd1, base frame
+Vec6 setpoint_twist(const urt_model_t* m, const urt_ctrl_t* c) noexcept {
   Mat3 R;
   Vec3 p;
   Mat6 J;
   tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R, p, &J);
-  Vec6 x = J * vec6(c->qd1);
+  return J * vec6(c->qd1);
+}
+
+double tcp_twist_decel_time(const urt_model_t* m, const urt_ctrl_t* c, double a,
+                            double a_rot) noexcept {
+  Vec6 x = setpoint_twist(m, c);
   return std::fmax(x.head<3>().norm() / a, x.tail<3>().norm() / a_rot);
+}
+
+// start servoing to the joint target q (servoj, and servol on its IK); a command without a
+// time lasts one period
+void start_servoj(urt_ctrl_t* c, Plan& p, const double* q, urt_ctrl_motion_t motion) noexcept {
+  std::memcpy(p.servoj.target, q, sizeof p.servoj.target);
+  p.servoj.since = 0.0;
+  if (!(c->active.t > 0.0)) {
+    c->active.t = c->period;
+  }
+  c->motion = motion;
 }
 
 // start decelerating every joint to rest, all together, the leading one at a
@@ -881,25 +909,15 @@ void tick_thermal(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d) noex
 
 void tcp_kinematics(const urt_arm_params_t& a, const double tcp[6], const Vec6& q, Mat3& R_BT,
                     Vec3& p_BT, Mat6* J) noexcept {
-  ArmKinematics k;
-  arm_kinematics(a, q, k);
   Vec3 z[URT_NJ], o[URT_NJ];
-  Mat3 R = Mat3::Identity();
-  Vec3 p = Vec3::Zero();
-  for (int j = 0; j < URT_NJ; ++j) {
-    z[j] = R.col(2);
-    o[j] = p;
-    p += R * k.p_PC[j];
-    R = R * k.R_PC[j];
-  }
+  Mat3 R;
+  Vec3 p;
+  joint_axes(a, q, z, o, R, p);
   const Vec3 p_FT(tcp[0], tcp[1], tcp[2]);
   R_BT = R * rotation_from_rotvec(Vec3(tcp[3], tcp[4], tcp[5]));
   p_BT = p + R * p_FT;
   if (J) {
-    for (int j = 0; j < URT_NJ; ++j) {
-      J->block<3, 1>(0, j) = z[j].cross(p_BT - o[j]);
-      J->block<3, 1>(3, j) = z[j];
-    }
+    point_jacobian(z, o, p_BT, *J);
   }
 }
 
@@ -1212,13 +1230,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         bad_target = all_finite(cmd->pose, 6) ? 0 : URT_PSTOP_NONFINITE_CMD;
         break;
       case URT_CTRL_TORQUE:
-        for (int j = 0; j < URT_NJ && !bad_target; j++) {
-          if (!std::isfinite(cmd->tau[j])) {
-            bad_target = URT_PSTOP_NONFINITE_CMD;
-          } else if (std::fabs(cmd->tau[j]) > m->joint[j].torque_max) {
-            bad_target = URT_PSTOP_TORQUE_LIMIT;
-          }
-        }
+        bad_target = torque_faults(m, cmd->tau);
         break;
       case URT_CTRL_FREEDRIVE:
         for (int j = 0; j < URT_NJ; j++) {
@@ -1231,12 +1243,8 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         if (!bad_target) {
           bad_target = speed_faults(m, cmd->qd);
         }
-        for (int j = 0; j < URT_NJ && !bad_target; j++) {
-          if (!std::isfinite(cmd->tau[j])) {
-            bad_target = URT_PSTOP_NONFINITE_CMD;
-          } else if (std::fabs(cmd->tau[j]) > m->joint[j].torque_max) {
-            bad_target = URT_PSTOP_TORQUE_LIMIT;
-          }
+        if (!bad_target) {
+          bad_target = torque_faults(m, cmd->tau);
         }
         break;
       default:
@@ -1319,12 +1327,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         }
         break;
       case URT_CTRL_SERVOJ:
-        std::memcpy(p.servoj.target, cmd->q, sizeof p.servoj.target);
-        p.servoj.since = 0.0;
-        if (!(c->active.t > 0.0)) {
-          c->active.t = c->period;
-        }
-        c->motion = URT_MOTION_SERVOJ;
+        start_servoj(c, p, cmd->q, URT_MOTION_SERVOJ);
         break;
       case URT_CTRL_SPEEDJ: {
         double dmax = 0.0;
@@ -1339,16 +1342,11 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         c->motion = URT_MOTION_SPEEDJ;
         break;
       }
-      case URT_CTRL_SPEEDL: {
-        Mat3 R;
-        Vec3 pos;
-        Mat6 J;
-        tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R, pos, &J);
-        put6(J * vec6(c->qd1), p.speedl.xd);
+      case URT_CTRL_SPEEDL:
+        put6(setpoint_twist(m, c), p.speedl.xd);
         std::memcpy(p.speedl.xd_goal, cmd->pose, sizeof p.speedl.xd_goal);
         c->motion = URT_MOTION_SPEEDL;
         break;
-      }
       case URT_CTRL_STOPJ:
         start_stop(c, p, joint_stop_time(c, cmd->a));
         break;
@@ -1362,20 +1360,11 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         break;
       case URT_CTRL_SERVOL:
         // servoj on the joint target of the pose (IK from the set-point, once per command)
-        std::memcpy(p.servoj.target, qg, sizeof p.servoj.target);
-        p.servoj.since = 0.0;
-        if (!(c->active.t > 0.0)) {
-          c->active.t = c->period;
-        }
-        c->motion = URT_MOTION_SERVOL;
+        start_servoj(c, p, qg, URT_MOTION_SERVOL);
         break;
       case URT_CTRL_SERVOC:
         if (prev_motion != URT_MOTION_SERVOC) {
-          Mat3 R;
-          Vec3 pos;
-          Mat6 J;
-          tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R, pos, &J);
-          put6(J * vec6(c->qd1), p.servoc.xd);
+          put6(setpoint_twist(m, c), p.servoc.xd);
         }
         std::memcpy(p.servoc.target, cmd->pose, sizeof p.servoc.target);
         c->motion = URT_MOTION_SERVOC;
@@ -1540,11 +1529,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         if (!c->force_mode || c->motion != URT_MOTION_FORCE) {
           // force mode takes the motion generator over from the current set-point and twist;
           // a running speedl goes on inside it, any other motion is over
-          Mat3 R;
-          Vec3 pos;
-          Mat6 J;
-          tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R, pos, &J);
-          Vec6 xd = J * vec6(c->qd1);
+          Vec6 xd = setpoint_twist(m, c);
           Vec6 goal = Vec6::Zero();
           if (c->motion == URT_MOTION_SPEEDL) {
             goal = vec6(p.speedl.xd_goal);

@@ -233,6 +233,43 @@ static void put_types(urt__rtde_w_t *w, const resolve_ctx_t *c, int n) {
   }
 }
 
+/* Resolve the comma-separated names p[0..n) into c (outputs, or inputs with their owners).
+ * Returns how many, 0 for an empty or too long list; *ok = 0 if the list is refused or a name
+ * is not found or in use; *size = the bytes of their values. */
+static int resolve_names(resolve_ctx_t *c, urt_rtde_session_t *s, int input, const uint8_t *p,
+                         size_t n, int *ok, size_t *size) {
+  int count = count_names(p, n);
+  if (count == 0 || count > URT_RTDE_MAX_FIELDS) {
+    *ok = 0;
+    count = count > URT_RTDE_MAX_FIELDS ? 0 : count;
+    n = 0;
+  }
+  c->s = s;
+  c->input = input;
+  split_names(p, n, resolve_one, c);
+  *size = 0;
+  for (int k = 0; k < count; k++) {
+    if (c->status[k]) {
+      *ok = 0;
+    }
+    *size += urt_rtde_type_size((urt_rtde_type_t)c->f[k].type);
+  }
+  return count;
+}
+
+/* The O or I reply: the id byte (id < 0: none), then the types. */
+static void reply_setup(urt_rtde_session_t *s, uint8_t type, int id, const resolve_ctx_t *c,
+                        int count) {
+  urt__rtde_w_t w = reply_begin(s);
+  be_put_u16(&w, 0);
+  be_put_u8(&w, type);
+  if (id >= 0) {
+    be_put_u8(&w, (uint8_t)id);
+  }
+  put_types(&w, c, count);
+  reply_end(s, &w);
+}
+
 //---- O: setup outputs ----
 
 static void handle_setup_outputs(urt_rtde_session_t *s, const uint8_t *p, size_t n) {
@@ -257,22 +294,8 @@ static void handle_setup_outputs(urt_rtde_session_t *s, const uint8_t *p, size_t
   }
 
   // resolve every name once, into kinds and types
-  int count = count_names(p, n);
-  if (count == 0 || count > URT_RTDE_MAX_FIELDS) {
-    ok = 0;
-    count = count > URT_RTDE_MAX_FIELDS ? 0 : count;
-    n = 0;
-  }
-  c.s = s;
-  c.input = 0;
-  split_names(p, n, resolve_one, &c);
-  size_t size = 0;
-  for (int k = 0; k < count; k++) {
-    if (c.status[k]) {
-      ok = 0;
-    }
-    size += urt_rtde_type_size((urt_rtde_type_t)c.f[k].type);
-  }
+  size_t size;
+  int count = resolve_names(&c, s, 0, p, n, &ok, &size);
 
   // install the recipe (one per connection: it replaces the previous one)
   s->out_configured = true;
@@ -287,14 +310,7 @@ static void handle_setup_outputs(urt_rtde_session_t *s, const uint8_t *p, size_t
   }
 
   // reply: v2 recipe id (1, or 0 if invalid), then the types
-  urt__rtde_w_t w = reply_begin(s);
-  be_put_u16(&w, 0);
-  be_put_u8(&w, URT_RTDE_SETUP_OUTPUTS);
-  if (s->protocol == 2) {
-    be_put_u8(&w, ok ? 1 : 0);
-  }
-  put_types(&w, &c, count);
-  reply_end(s, &w);
+  reply_setup(s, URT_RTDE_SETUP_OUTPUTS, s->protocol == 2 ? (ok ? 1 : 0) : -1, &c, count);
 }
 
 //---- I: setup inputs ----
@@ -302,22 +318,9 @@ static void handle_setup_outputs(urt_rtde_session_t *s, const uint8_t *p, size_t
 static void handle_setup_inputs(urt_rtde_session_t *s, const uint8_t *p, size_t n) {
   resolve_ctx_t c;
   int ok = 1;
-  int count = count_names(p, n);
-  if (count == 0 || count > URT_RTDE_MAX_FIELDS) {
-    ok = 0;
-    count = count > URT_RTDE_MAX_FIELDS ? 0 : count;
-    n = 0;
-  }
-  c.s = s;
-  c.input = 1;
-  split_names(p, n, resolve_one, &c);
-  size_t size = 1;
-  for (int k = 0; k < count; k++) {
-    if (c.status[k]) {
-      ok = 0;
-    }
-    size += urt_rtde_type_size((urt_rtde_type_t)c.f[k].type);
-  }
+  size_t size;
+  int count = resolve_names(&c, s, 1, p, n, &ok, &size);
+  size += 1;  // the recipe id that leads a U package
 
   // room for one more recipe whose U package fits the input buffer
   if (s->n_in >= URT_RTDE_MAX_INPUT_RECIPES || s->pool_used + count > URT_RTDE_INPUT_POOL ||
@@ -341,12 +344,7 @@ static void handle_setup_inputs(urt_rtde_session_t *s, const uint8_t *p, size_t 
   }
 
   // reply (both protocol versions): recipe id, then the types
-  urt__rtde_w_t w = reply_begin(s);
-  be_put_u16(&w, 0);
-  be_put_u8(&w, URT_RTDE_SETUP_INPUTS);
-  be_put_u8(&w, (uint8_t)id);
-  put_types(&w, &c, count);
-  reply_end(s, &w);
+  reply_setup(s, URT_RTDE_SETUP_INPUTS, id, &c, count);
 }
 
 //---- U: client data ----

@@ -350,19 +350,6 @@ static void text(rc *R, const char *fmt, ...) {
   R->host->message(R->host->ctx, &m);
 }
 
-static bool safety_ok(const urt_snapshot_t *s) {
-  return s->safety_mode == URT_SAFETY_MODE_NORMAL || s->safety_mode == URT_SAFETY_MODE_REDUCED;
-}
-
-static const char *fault_text(uint32_t f) {
-  if (f & URT_CTRL_FAULT_NOT_RUNNING) return "robot is not running";
-  if (f & URT_CTRL_FAULT_BAD_TARGET) return "invalid target";
-  if (f & URT_CTRL_FAULT_IK) return "no inverse kinematics solution";
-  if (f & URT_CTRL_FAULT_BAD_ARGUMENT) return "argument out of range";
-  if (f & URT_CTRL_FAULT_PSTOP) return "protective stop";
-  return "safety stop";
-}
-
 //---- registers ----
 
 static double in_d(rc *R, int k) { return R->reg.in_double[k + R->of]; }
@@ -463,13 +450,9 @@ static int submit_motion(rc *R, urt_ctrl_cmd_t *c) {
 }
 
 static int motion_check(rc *R, const char *what) {
-  const urt_snapshot_t *s = &R->s;
-  if (s->robot_mode != URT_ROBOT_MODE_RUNNING && !s->ctrl_fault) {
-    return fail(R, "%s: motion refused (robot is not running; robot mode %d)", what, (int)s->robot_mode);
-  }
-  if (s->ctrl_fault || !safety_ok(s)) {
-    return fail(R, "%s: motion refused or aborted (%s; safety mode %d)", what,
-                fault_text(s->ctrl_fault), (int)s->safety_mode);
+  char text[sizeof R->err->text];
+  if (urt__us_motion_refused(&R->s, what, "safety stop", text, sizeof text)) {
+    return fail(R, "%s", text);
   }
   return 0;
 }
@@ -480,7 +463,7 @@ static int move_wait(rc *R, urt_ctrl_cmd_t *c, const char *what) {
   for (;;) {
     R->host->snapshot(R->host->ctx, &R->s);
     if (R->s.motion_done_id >= c->id) break;
-    if (!safety_ok(&R->s) || R->s.robot_mode != URT_ROBOT_MODE_RUNNING) break;
+    if (!urt__us_safety_ok(&R->s) || R->s.robot_mode != URT_ROBOT_MODE_RUNNING) break;
     if (wait_once(R) != 0) return -1;
   }
   return motion_check(R, what);
@@ -571,7 +554,7 @@ static int path_move(rc *R, int i, bool wait) {
 static int service_async(rc *R) {
   if (R->async_kind == ASYNC_NONE) return 0;
   if (R->s.motion_done_id < R->async_id) {
-    if (!safety_ok(&R->s) || R->s.robot_mode != URT_ROBOT_MODE_RUNNING) {
+    if (!urt__us_safety_ok(&R->s) || R->s.robot_mode != URT_ROBOT_MODE_RUNNING) {
       return motion_check(R, R->async_kind == ASYNC_STOP ? "stop" : "move");
     }
     return 0;
@@ -667,7 +650,7 @@ static int service_tick(rc *R) {
   // a streamed motion (servo, speed, force, torque, jog) that the controller refused or aborted
   if (R->servoing || R->speeding || R->forcing || R->torquing || R->jogging) {
     bool applied = R->s.motion_id >= R->stream_id || R->s.motion_done_id >= R->stream_id;
-    if (!safety_ok(&R->s) || R->s.robot_mode != URT_ROBOT_MODE_RUNNING ||
+    if (!urt__us_safety_ok(&R->s) || R->s.robot_mode != URT_ROBOT_MODE_RUNNING ||
         (applied && R->s.ctrl_fault)) {
       R->servoing = R->speeding = R->forcing = R->torquing = R->jogging = false;
       return motion_check(R, "streamed motion");

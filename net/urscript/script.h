@@ -127,6 +127,15 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err);
 void urt__us_rotvec_to_mat(const double r[3], double R[9]);
 void urt__us_pose_trans(const double p_from[6], const double p_from_to[6], double out[6]);
 
+/* Whether the safety mode lets the arm move (normal or reduced). */
+bool urt__us_safety_ok(const urt_snapshot_t *s);
+
+/* Whether the controller would refuse a motion now (not running) or has refused or aborted
+ * one (a fault bit, or a safety stop): false if it may go, else true with the message
+ * "<what>: motion refused …" in text[n]. unknown names a fault with no known bit. */
+bool urt__us_motion_refused(const urt_snapshot_t *s, const char *what, const char *unknown,
+                            char *text, size_t n);
+
 /* Format an error as the RUNTIME_EXCEPTION (or KEY for secondary programs) message. */
 void urt__us_err_msg(const us_err *e, bool secondary, urt_script_msg_t *msg);
 

@@ -348,28 +348,38 @@ static int submit(vm *V, const us_node *at, const urt_ctrl_cmd_t *cmd) {
   return fail(V, at, "Controller command queue is full");
 }
 
-static bool safety_ok(const urt_snapshot_t *s) {
+bool urt__us_safety_ok(const urt_snapshot_t *s) {
   return s->safety_mode == URT_SAFETY_MODE_NORMAL || s->safety_mode == URT_SAFETY_MODE_REDUCED;
 }
 
-static const char *fault_text(uint32_t f) {
+static const char *fault_text(uint32_t f, const char *unknown) {
   if (f & URT_CTRL_FAULT_NOT_RUNNING) return "robot is not running";
   if (f & URT_CTRL_FAULT_BAD_TARGET) return "invalid target";
   if (f & URT_CTRL_FAULT_IK) return "no inverse kinematics solution";
   if (f & URT_CTRL_FAULT_BAD_ARGUMENT) return "argument out of range";
   if (f & URT_CTRL_FAULT_PSTOP) return "protective stop";
-  return "unknown";
+  return unknown;
+}
+
+bool urt__us_motion_refused(const urt_snapshot_t *s, const char *what, const char *unknown,
+                            char *text, size_t n) {
+  if (s->robot_mode != URT_ROBOT_MODE_RUNNING && !s->ctrl_fault) {
+    snprintf(text, n, "%s: motion refused (robot is not running; robot mode %d)", what,
+             (int)s->robot_mode);
+    return true;
+  }
+  if (s->ctrl_fault || !urt__us_safety_ok(s)) {
+    snprintf(text, n, "%s: motion refused or aborted (%s; safety mode %d)", what,
+             fault_text(s->ctrl_fault, unknown), (int)s->safety_mode);
+    return true;
+  }
+  return false;
 }
 
 static int motion_check(vm *V, const us_node *at, const char *what) {
-  const urt_snapshot_t *s = &V->snap;
-  if (s->robot_mode != URT_ROBOT_MODE_RUNNING && !s->ctrl_fault) {
-    return fail(V, at, "%s: motion refused (robot is not running; robot mode %d)", what,
-                (int)s->robot_mode);
-  }
-  if (s->ctrl_fault || !safety_ok(s)) {
-    return fail(V, at, "%s: motion refused or aborted (%s; safety mode %d)", what,
-                fault_text(s->ctrl_fault), (int)s->safety_mode);
+  char text[sizeof V->err->text];
+  if (urt__us_motion_refused(&V->snap, what, "unknown", text, sizeof text)) {
+    return fail(V, at, "%s", text);
   }
   return X_OK;
 }
@@ -391,7 +401,7 @@ static int motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *cm
     if (V->snap.motion_done_id >= cmd->id) {
       break;
     }
-    if (!safety_ok(&V->snap) || V->snap.robot_mode != URT_ROBOT_MODE_RUNNING) {
+    if (!urt__us_safety_ok(&V->snap) || V->snap.robot_mode != URT_ROBOT_MODE_RUNNING) {
       break;  // refused or aborted: reported below
     }
     if (wait_tick(V, at) != X_OK) {

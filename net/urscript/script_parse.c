@@ -473,19 +473,28 @@ static bool enter(parser *P) {
 
 static us_node *parse_expr(parser *P);
 
+/* one element of a list literal or an argument list (name: the argument's, or NULL); false
+ * if it failed or the list is full */
+static bool parse_item(parser *P, nlist *l, const us_name *name) {
+  us_node *e = parse_expr(P);
+  if (P->failed) {
+    return false;
+  }
+  if (l->n >= URT_SCRIPT_MAX_LIST) {
+    syntax_error(P, &P->t);
+    return false;
+  }
+  nlist_push(P, l, e, name);
+  return true;
+}
+
 static us_node *parse_list_tail(parser *P, us_node *n, int close) {
   nlist l = {0};
   if (P->t.kind != close) {
     do {
-      us_node *e = parse_expr(P);
-      if (P->failed) {
+      if (!parse_item(P, &l, NULL)) {
         break;
       }
-      if (l.n >= URT_SCRIPT_MAX_LIST) {
-        syntax_error(P, &P->t);
-        break;
-      }
-      nlist_push(P, &l, e, NULL);
     } while (!P->failed && accept(P, T_COMMA));
   }
   if (!P->failed) {
@@ -629,15 +638,9 @@ static us_node *parse_postfix(parser *P) {
             syntax_error(P, &P->t);  // positional after named
             break;
           }
-          us_node *a = parse_expr(P);
-          if (P->failed) {
+          if (!parse_item(P, &l, argname)) {
             break;
           }
-          if (l.n >= URT_SCRIPT_MAX_LIST) {
-            syntax_error(P, &P->t);
-            break;
-          }
-          nlist_push(P, &l, a, argname);
         } while (!P->failed && accept(P, T_COMMA));
       }
       nlist_finish(P, &l, c, true);

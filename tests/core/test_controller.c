@@ -8,50 +8,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "controller_harness.h"
 #include "test_model.h"
 #include "test_support.h"
 #include "urt/controller.h"
 #include "urt/snapshot.h"
-
-typedef struct rig {
-  urt_model_t *m;
-  urt_data_t *d;
-  urt_ctrl_t *c;
-  uint64_t next_id;
-} rig_t;
-
-static rig_t rig_new(const char *const *overrides, double period, int powered) {
-  rig_t r;
-  r.m = urt_test_model(overrides);
-  r.d = calloc(1, sizeof *r.d);
-  r.c = calloc(1, sizeof *r.c);
-  assert_non_null(r.d);
-  assert_non_null(r.c);
-  assert_int_equal(urt_data_init(r.m, r.d, NULL), 0);
-  assert_int_equal(urt_ctrl_init(r.m, r.c, r.d, period, powered), 0);
-  r.next_id = 1;
-  return r;
-}
-
-static void rig_free(rig_t *r) {
-  free(r->d);
-  free(r->c);
-  urt_model_free(r->m);
-}
-
-/* one controller period: commands, tick, physics steps */
-static void rig_period(rig_t *r, const urt_ctrl_cmd_t *cmd) {
-  if (cmd) {
-    urt_ctrl_apply(r->m, r->c, r->d, cmd);
-  }
-  urt_ctrl_tick(r->m, r->c, r->d);
-  for (int k = 0; k < r->c->n_sub; k++) {
-    urt_command_t sp;
-    urt_ctrl_setpoint(r->m, r->c, k, &sp);
-    urt_command_set(r->m, r->d, &sp);
-    urt_step(r->m, r->d);
-  }
-}
 
 static double q_act(const rig_t *r, int j) { return r->d->x[j][URT_X_Q]; }
 
@@ -83,13 +44,6 @@ static double run_until_done(rig_t *r, const urt_ctrl_cmd_t *cmd, double max_t) 
     t += r->c->period;
   }
   return t;
-}
-
-static void run_for(rig_t *r, double t) {
-  int n = (int)lround(t / r->c->period);
-  for (int i = 0; i < n; i++) {
-    rig_period(r, NULL);
-  }
 }
 
 /* ideal trapezoid time of a distance D at a, v */
@@ -131,15 +85,6 @@ static void test_movej__trapezoid_time_and_settling_e_series(void **state) {
 static void test_movej__trapezoid_time_and_settling_cb3(void **state) {
   (void)state;
   movej_shoulder(0.008);
-}
-
-
-static void tcp_actual(const rig_t *r, double pose[6]) {
-  double q[URT_NJ];
-  for (int j = 0; j < URT_NJ; j++) {
-    q[j] = q_act(r, j);
-  }
-  urt_ctrl_forward_kinematics_tcp(r->m, r->c->tcp_offset, q, pose);
 }
 
 static void test_movel__straight_10_cm(void **state) {
@@ -474,17 +419,6 @@ static void test_inverse_kinematics__round_trip(void **state) {
   urt_model_free(m);
 }
 
-static int state_finite(const urt_data_t *d) {
-  for (int j = 0; j < URT_NJ; j++) {
-    for (int i = 0; i < URT_NXJ; i++) {
-      if (!isfinite(d->x[j][i])) {
-        return 0;
-      }
-    }
-  }
-  return 1;
-}
-
 static void test_bad_target__protective_stop_then_unlock(void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
@@ -508,7 +442,7 @@ static void test_bad_target__protective_stop_then_unlock(void **state) {
   assert_true(r.c->motion_done_id >= bad.id);
   assert_true(r.c->motion_done_id >= c.id);
   run_for(&r, 0.3);
-  assert_true(state_finite(r.d));
+  assert_true(urt_test_state_finite(r.d));
   for (int j = 0; j < URT_NJ; j++) {
     assert_true(isfinite(r.c->q1[j]));
   }
@@ -572,7 +506,7 @@ static void test_pstop__follows_the_physics(void **state) {
   assert_true(r.c->motion_done_id >= c.id);
   assert_int_equal(r.c->motion, URT_MOTION_IDLE);
   run_for(&r, 0.3);
-  assert_true(state_finite(r.d));
+  assert_true(urt_test_state_finite(r.d));
   urt_snapshot_t s;
   urt_snapshot_fill(r.m, r.c, r.d, &s);
   assert_int_equal(s.safety_mode, URT_SAFETY_MODE_PROTECTIVE_STOP);

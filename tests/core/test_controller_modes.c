@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "controller_harness.h"
 #include "test_model.h"
 #include "test_support.h"
 #include "urt/controller.h"
@@ -27,52 +28,6 @@ static const double kHoldTime = 0.5;
 #else
 static const double kHoldTime = 2.0;
 #endif
-
-typedef struct rig {
-  urt_model_t *m;
-  urt_data_t *d;
-  urt_ctrl_t *c;
-  uint64_t next_id;
-} rig_t;
-
-static rig_t rig_new(void) {
-  rig_t r;
-  r.m = urt_test_model(NULL);
-  r.d = calloc(1, sizeof *r.d);
-  r.c = calloc(1, sizeof *r.c);
-  assert_non_null(r.d);
-  assert_non_null(r.c);
-  assert_int_equal(urt_data_init(r.m, r.d, NULL), 0);
-  assert_int_equal(urt_ctrl_init(r.m, r.c, r.d, 0.002, 1), 0);
-  r.next_id = 1;
-  return r;
-}
-
-static void rig_free(rig_t *r) {
-  free(r->d);
-  free(r->c);
-  urt_model_free(r->m);
-}
-
-static void rig_period(rig_t *r, const urt_ctrl_cmd_t *cmd) {
-  if (cmd) {
-    urt_ctrl_apply(r->m, r->c, r->d, cmd);
-  }
-  urt_ctrl_tick(r->m, r->c, r->d);
-  for (int k = 0; k < r->c->n_sub; k++) {
-    urt_command_t sp;
-    urt_ctrl_setpoint(r->m, r->c, k, &sp);
-    urt_command_set(r->m, r->d, &sp);
-    urt_step(r->m, r->d);
-  }
-}
-
-static void run_for(rig_t *r, double t) {
-  int n = (int)lround(t / r->c->period);
-  for (int i = 0; i < n; i++) {
-    rig_period(r, NULL);
-  }
-}
 
 static urt_ctrl_cmd_t cmd_of(rig_t *r, int kind) {
   urt_ctrl_cmd_t c;
@@ -94,12 +49,6 @@ static double q_dist(const double *a, const double *b) {
     e = fmax(e, fabs(a[j] - b[j]));
   }
   return e;
-}
-
-static void tcp_actual(const rig_t *r, double pose[6]) {
-  double q[URT_NJ];
-  q_actual(r, q);
-  urt_ctrl_forward_kinematics_tcp(r->m, r->c->tcp_offset, q, pose);
 }
 
 static void rotvec_matrix(const double *r, double R[9]) {
@@ -160,7 +109,7 @@ static void go_to_work_pose(rig_t *r) {
 
 static void test_pause__movej_slows_holds_and_resumes_to_the_same_target(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   urt_ctrl_cmd_t play = cmd_of(&r, URT_CTRL_PROGRAM_STATE);
   play.index = URT_PROGRAM_PLAYING;
   rig_period(&r, &play);
@@ -229,7 +178,7 @@ static void test_pause__movej_slows_holds_and_resumes_to_the_same_target(void **
 
 static void test_pause__streaming_stops_and_program_stop_clears_the_pause(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   urt_ctrl_cmd_t play = cmd_of(&r, URT_CTRL_PROGRAM_STATE);
   play.index = URT_PROGRAM_PLAYING;
   rig_period(&r, &play);
@@ -258,7 +207,7 @@ static void test_pause__streaming_stops_and_program_stop_clears_the_pause(void *
 
 static void test_set_wrench__shows_in_tcp_force_and_bad_values_are_refused(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   urt_ctrl_cmd_t w = cmd_of(&r, URT_CTRL_SET_WRENCH);
   const double wr[6] = {15.0, -8.0, 25.0, 1.5, -0.7, 0.4};
   memcpy(w.pose, wr, sizeof wr);
@@ -323,7 +272,7 @@ static double stream_gravity_torque(rig_t *r, double t, const double *extra, int
 
 static void test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   const double t_hold = kHoldTime;
   double drift = stream_gravity_torque(&r, t_hold, NULL, 0);
@@ -377,7 +326,7 @@ static void test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it(voi
 
 static void test_freedrive__holds_without_a_wrench_and_gives_way_to_one(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   urt_ctrl_cmd_t fd = cmd_of(&r, URT_CTRL_FREEDRIVE);
   fd.index = 1;
@@ -424,7 +373,7 @@ static void test_freedrive__holds_without_a_wrench_and_gives_way_to_one(void **s
 
 static void test_freedrive__held_axes_resist_free_axis_gives_way(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   urt_ctrl_cmd_t fd = cmd_of(&r, URT_CTRL_FREEDRIVE);
   fd.index = 1;
@@ -462,7 +411,7 @@ static void test_freedrive__held_axes_resist_free_axis_gives_way(void **state) {
 
 static void test_set_gravity__changes_the_controllers_model_not_the_world(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   // the controller believes there is no gravity: in freedrive the arm falls (a model off by a
   // little would stick: friction holds up to ~10 N m on the big joints)
@@ -492,7 +441,7 @@ static void test_set_gravity__changes_the_controllers_model_not_the_world(void *
 
 static void test_servol__reaches_a_streamed_pose(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   double p0[6], goal[6], p[6];
   tcp_actual(&r, p0);
@@ -527,7 +476,7 @@ static void test_servol__reaches_a_streamed_pose(void **state) {
 
 static void test_servoc__moves_at_tool_speed_v_to_the_pose(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   double p0[6], goal[6], p[6], pa[6];
   tcp_actual(&r, p0);
@@ -568,7 +517,7 @@ static void test_servoc__moves_at_tool_speed_v_to_the_pose(void **state) {
 
 static void test_force_mode__complies_along_z_and_holds_the_other_axes(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   urt_ctrl_cmd_t f = cmd_of(&r, URT_CTRL_FORCE_MODE);
   f.id = 0;
@@ -638,7 +587,7 @@ static void test_force_mode__complies_along_z_and_holds_the_other_axes(void **st
 
 static void test_force_mode__type_1_pulls_toward_the_frame_origin(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   double p0[6], p1[6];
   tcp_actual(&r, p0);
@@ -671,7 +620,7 @@ static void test_force_mode__type_1_pulls_toward_the_frame_origin(void **state) 
 
 static void test_modes__no_heap_allocation(void **state) {
   (void)state;
-  rig_t r = rig_new();
+  rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   double p[6];
   tcp_actual(&r, p);

@@ -26,17 +26,6 @@ static urt_data_t *new_data(const urt_model_t *m) {
   return d;
 }
 
-static int state_finite(const urt_data_t *d) {
-  for (int j = 0; j < URT_NJ; j++) {
-    for (int i = 0; i < URT_NXJ; i++) {
-      if (!isfinite(d->x[j][i])) {
-        return 0;
-      }
-    }
-  }
-  return 1;
-}
-
 static void test_step__makes_no_heap_allocations(void **state) {
   (void)state;
   urt_model_t *m = urt_test_model(NULL);
@@ -65,7 +54,7 @@ static void expect_refused(const urt_model_t *m, urt_data_t *d, const urt_comman
   for (int k = 0; k < 200; k++) {
     urt_step(m, d);
   }
-  assert_true(state_finite(d));
+  assert_true(urt_test_state_finite(d));
   for (int j = 0; j < URT_NJ; j++) {
     assert_true(isfinite(d->cmd.q[j]));
     assert_near(d->x[j][URT_X_Q], m->q0[j], 1e-3);  // held where it was
@@ -118,7 +107,7 @@ static void test_step__refuses_nan_written_straight_into_the_command(void **stat
   d->cmd.qdd[3] = NAN;
   urt_step(m, d);
   assert_true(d->pstop & URT_PSTOP_NONFINITE_CMD);
-  assert_true(state_finite(d));
+  assert_true(urt_test_state_finite(d));
   free(d);
   urt_model_free(m);
 }
@@ -301,7 +290,7 @@ static void test_step__unstable_settings_end_in_a_protective_stop_not_in_nan(voi
   assert_int_equal(rc, URT_ESOLVER);
   assert_true(d->pstop & URT_PSTOP_NONFINITE_STATE);
   assert_true(d->refined_count > 0);
-  assert_true(state_finite(d));
+  assert_true(urt_test_state_finite(d));
   for (int j = 0; j < URT_NJ; j++) {
     assert_true(fabs(d->x[j][URT_X_QD]) < 10.0 * m->joint[j].qd_max);
   }
