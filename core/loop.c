@@ -59,6 +59,7 @@ struct urt_loop {
   _Atomic uint64_t latest_tick, latest_drive;
   _Atomic uint32_t futex_word;      /* low bits of latest_tick, for futex waits */
   _Atomic int waiters;
+  _Atomic int notify_fd;            /* eventfd written after each tick, or -1   */
 
   /* lockstep */
   _Atomic uint64_t granted;         /* ticks allowed so far */
@@ -137,6 +138,7 @@ int urt_loop_create(const urt_model_t *m, const urt_loop_config_t *cfg, const do
   }
   l->m = m;
   l->cfg = *cfg;
+  l->notify_fd = -1;
   l->n_sub = n_sub;
   l->dt_ns = llround(m->dt * 1e9);
   l->period_ns = l->dt_ns * n_sub;
@@ -267,6 +269,8 @@ int urt_loop_read_drive(const urt_loop_t *l, uint64_t seq, urt_drive_sample_t *o
   return read_slot(l->drive_history, DRIVE_HISTORY, seq, out);
 }
 
+void urt_loop_set_notify_fd(urt_loop_t *l, int eventfd) { atomic_store(&l->notify_fd, eventfd); }
+
 void urt_loop_grant(urt_loop_t *l, uint64_t n) {
   atomic_fetch_add(&l->granted, n);
   atomic_fetch_add(&l->grant_word, 1);
@@ -379,6 +383,13 @@ static void publish_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
   atomic_store(&l->futex_word, (uint32_t)tick);
   if (atomic_load(&l->waiters) > 0) {
     futex_wake_all(&l->futex_word);
+  }
+  int fd = atomic_load_explicit(&l->notify_fd, memory_order_acquire);
+  if (fd >= 0) {
+    // the I/O thread waits in epoll: one non-blocking eventfd write instead of a relay thread
+    uint64_t one = 1;
+    ssize_t rc = write(fd, &one, sizeof one);
+    (void)rc;  // EAGAIN: the counter is full, the reader is woken anyway
   }
 }
 

@@ -201,6 +201,7 @@ int main(int argc, char** argv) {
   ec.programs_dir = o.programs_dir.c_str();
   ec.local_control = o.local_control;
   ec.serial_number = o.serial_number.c_str();
+  ec.rt_priority = o.rt_priority > 1 ? o.rt_priority - 1 : 0;  // just below the physics
   urt_emulator_t* emu = nullptr;
   if (urt_emulator_create(loop, &ec, &emu, err, sizeof err) != 0) {
     std::fprintf(stderr, "urtwin: %s\n", err);

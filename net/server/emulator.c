@@ -1,14 +1,16 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/server/emulator.c — the I/O thread behind every TCP port (emulator.h): one epoll loop
- * serves all clients and is the single producer of client commands into the hard loop. A relay
- * thread turns the loop's futex wake-ups into an eventfd, so new ticks arrive in the same epoll
- * loop as socket events. What each port does lives in port_script.c, port_rtde.c and
+ * serves all clients and is the single producer of client commands into the hard loop. The
+ * loop writes an eventfd after each tick (urt_loop_set_notify_fd), so new ticks arrive in the
+ * same epoll loop as socket events. What each port does lives in port_script.c, port_rtde.c and
  * port_dashboard.c; this file owns the connections, the tick fan-out and the runner's host.
  */
 #define _GNU_SOURCE
 #include "urt/net/emulator.h"
 
 #include <errno.h>
+#include <pthread.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -312,23 +314,17 @@ static void drain_messages(urt_emulator_t *e) {
 
 //---- threads ----
 
-static void *relay_main(void *arg) {
-  urt_emulator_t *e = arg;
-  uint64_t seen = urt_loop_latest_tick(e->loop);
-  while (!atomic_load(&e->stop)) {
-    uint64_t t = urt_loop_wait(e->loop, seen, 50);
-    if (t > seen) {
-      seen = t;
-      uint64_t one = 1;
-      ssize_t rc = write(e->tick_fd, &one, sizeof one);
-      (void)rc;
-    }
-  }
-  return NULL;
-}
-
 static void *io_main(void *arg) {
   urt_emulator_t *e = arg;
+  if (e->cfg.rt_priority > 0) {
+    // just below the physics thread: the streams' jitter is the I/O thread's wake-up latency
+    struct sched_param sp = {.sched_priority = e->cfg.rt_priority};
+    int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
+    if (rc != 0) {
+      fprintf(stderr, "urtwin: warning: SCHED_FIFO priority %d for the I/O thread refused (%s)\n",
+              e->cfg.rt_priority, strerror(rc));
+    }
+  }
   struct epoll_event ev[MAX_EVENTS];
   while (!atomic_load(&e->stop)) {
     int n = epoll_wait(e->epoll_fd, ev, MAX_EVENTS, 50);
@@ -420,6 +416,7 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
     urt_emulator_destroy(e);
     return URT_EIO;
   }
+  urt_loop_set_notify_fd(loop, e->tick_fd);
   struct epoll_event ev = {.events = EPOLLIN};
   ev.data.ptr = (void *)(uintptr_t)TAG_TICK;
   epoll_ctl(e->epoll_fd, EPOLL_CTL_ADD, e->tick_fd, &ev);
@@ -459,11 +456,6 @@ int urt_emulator_start(urt_emulator_t *e) {
   if (urt_thread_start(&e->io_thread, io_main, e, THREAD_STACK) != 0) {
     return URT_EIO;
   }
-  if (urt_thread_start(&e->relay_thread, relay_main, e, THREAD_STACK) != 0) {
-    atomic_store(&e->stop, 1);
-    pthread_join(e->io_thread, NULL);
-    return URT_EIO;
-  }
   e->started = 1;
   return URT_OK;
 }
@@ -473,7 +465,6 @@ void urt_emulator_stop(urt_emulator_t *e) {
     return;
   }
   atomic_store(&e->stop, 1);
-  pthread_join(e->relay_thread, NULL);
   pthread_join(e->io_thread, NULL);
   e->started = 0;
 }
@@ -483,6 +474,10 @@ void urt_emulator_destroy(urt_emulator_t *e) {
     return;
   }
   urt_emulator_stop(e);
+  urt_loop_set_notify_fd(e->loop, -1);
+  // a running loop may be writing the old fd in the tick under way: let two ticks pass
+  uint64_t t = urt_loop_latest_tick(e->loop);
+  urt_loop_wait(e->loop, urt_loop_wait(e->loop, t, 100), 100);
   urt_runner_destroy(e->runner);
   while (e->clients) {
     close_client(e, e->clients);

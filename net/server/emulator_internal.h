@@ -74,7 +74,7 @@ struct urt_emulator {
   unsigned msg_head, msg_len;
   uint64_t msg_dropped;
 
-  pthread_t io_thread, relay_thread;
+  pthread_t io_thread;
   _Atomic int stop;
   _Atomic int shutdown_requested;  /* the dashboard asked the emulator to shut down */
   int started;
