@@ -363,7 +363,8 @@ static void physics_step(urt_loop_t *l, int k) {
   }
 }
 
-static void publish_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
+// Store tick's snapshot in the history (readers cannot see it until announce_tick).
+static void write_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
   urt_snapshot_t *s = &l->snap;
   urt_snapshot_fill(l->m, &l->c, &l->d, s);
   s->tick = tick;
@@ -379,6 +380,10 @@ static void publish_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
   }
   s->cmd_dropped = dropped;
   urt_seqlock_write(&l->history[tick % URT_LOOP_HISTORY], s);
+}
+
+// Make tick the newest and wake its readers.
+static void announce_tick(urt_loop_t *l, uint64_t tick) {
   atomic_store_explicit(&l->latest_tick, tick, memory_order_release);
   atomic_store(&l->futex_word, (uint32_t)tick);
   if (atomic_load(&l->waiters) > 0) {
@@ -431,7 +436,10 @@ static void *physics_main(void *arg) {
     tick++;
     int64_t end = now_ns();
     int64_t exec = busy + (end - start);
-    publish_snapshot(l, tick, exec);
+    write_snapshot(l, tick, exec);
+    if (pacing != URT_PACING_TICK) {
+      announce_tick(l, tick);
+    }
     atomic_store_explicit(&l->exec_last_ns, (uint64_t)exec, memory_order_relaxed);
     if ((uint64_t)exec > atomic_load_explicit(&l->exec_max_ns, memory_order_relaxed)) {
       atomic_store_explicit(&l->exec_max_ns, (uint64_t)exec, memory_order_relaxed);
@@ -450,7 +458,10 @@ static void *physics_main(void *arg) {
         }
       }
       if (pacing == URT_PACING_TICK) {
+        // the state at time k·P goes out at wall time k·P: readers see it on the clock's beat,
+        // not whenever this period's computation happened to end (that varies by ~100 µs)
         sleep_until(anchor + (int64_t)tick * l->period_ns);
+        announce_tick(l, tick);
       }
     }
   }

@@ -36,7 +36,16 @@ def vm_rss_kib(pid):
     return None
 
 
-def run_once(args, build, extra):
+def chrt_prefix():
+    """['chrt', '-f', '70'] when this process may run a SCHED_FIFO client, else []."""
+    try:
+        ok = subprocess.run(["chrt", "-f", "70", "true"], capture_output=True).returncode == 0
+    except OSError:
+        ok = False
+    return ["chrt", "-f", "70"] if ok else []
+
+
+def run_once(args, build, extra, client_prefix):
     """One emulator run under load; returns the result dict or None."""
     emu = subprocess.Popen(
         [str(build / "tools" / "urtwin"), "--config", str(ROOT / "config" / "ur5.yaml"),
@@ -49,7 +58,7 @@ def run_once(args, build, extra):
         probe = None
         while time.monotonic() - t0 < 5:
             probe = subprocess.Popen(
-                [str(build / "tools" / "urt_rtprobe"), "--host", args.host, "--port", str(port),
+                [*client_prefix, str(build / "tools" / "urt_rtprobe"), "--host", args.host, "--port", str(port),
                  "--clients", str(args.clients), "--seconds", str(args.seconds)],
                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
             time.sleep(0.3)
@@ -68,7 +77,7 @@ def run_once(args, build, extra):
         seen = json.loads(out)
         # then RTDE: one client measured with 8 others connected (9 streams, all timed)
         rtde = subprocess.run(
-            [str(build / "tools" / "urt_rtprobe"), "--host", args.host, "--rtde",
+            [*client_prefix, str(build / "tools" / "urt_rtprobe"), "--host", args.host, "--rtde",
              "--port", str(30004 + args.port_offset), "--clients", str(args.clients + 1),
              "--seconds", str(args.seconds)],
             capture_output=True, text=True, timeout=args.seconds + 30)
@@ -82,6 +91,7 @@ def run_once(args, build, extra):
     m = re.search(r"stopped after (\d+) ticks, (\d+) overruns, (\d+) missed periods", emu_err)
     return {
         "options": extra,
+        "client": " ".join(client_prefix) or "SCHED_OTHER",
         "warnings": [l for l in emu_err.splitlines() if "warning" in l],
         "rt_clients": seen,
         "rtde_clients": seen_rtde,
@@ -106,12 +116,17 @@ def main(argv=None):
     args = ap.parse_args(argv)
     build = Path(args.build)
     runs = {}
-    for name, extra in (("plain", []), ("sched_fifo_mlock", ["--rt-priority", "80", "--lock-memory"])):
-        res = run_once(args, build, extra)
+    # plain: everything SCHED_OTHER; then the emulator at SCHED_FIFO 80 (I/O thread 79) with
+    # locked memory and the measuring clients at SCHED_FIFO 70, as a real-time client would be
+    fifo = chrt_prefix()
+    for name, extra, prefix in (("plain", [], []),
+                                ("sched_fifo_mlock", ["--rt-priority", "80", "--lock-memory"], fifo)):
+        res = run_once(args, build, extra, prefix)
         if res is None:
             return 1
         runs[name] = res
         seen, e, iv = res["rt_clients"], res["emulator"], res["rt_clients"]["interval_us"]
+        print(f"[{name}] clients {res['client']}")
         print(f"[{name}] 30003 with {seen['clients']} clients for {args.seconds:.0f} s: "
               f"{seen['packets']} packets, {seen['timestamp_gaps']} timestamp gaps; inter-packet "
               f"period p50 {iv['p50']:.0f} us, p99 {iv['p99']:.0f} us, p99.9 {iv['p99_9']:.0f} us, "
