@@ -29,6 +29,7 @@
 
 #define DRIVE_HISTORY 1024          /* drive samples kept (1 s at 1 kHz)            */
 #define CATCH_UP_LIMIT 50           /* periods behind before the clock is re-anchored */
+#define COMMAND_WINDOW_DIV 10       /* tick pacing: wait period/10 after a tick before draining */
 #define STACK_PREFAULT (256 * 1024) /* bytes of stack touched before the loop        */
 #define PHYSICS_STACK (1024 * 1024) /* the physics thread's whole stack                */
 
@@ -462,6 +463,10 @@ static void *physics_main(void *arg) {
         // not whenever this period's computation happened to end (that varies by ~100 µs)
         sleep_until(anchor + (int64_t)tick * l->period_ns);
         announce_tick(l, tick);
+        // a short window for the readers woken by this tick (the URScript runner, the native
+        // rtde_control loop) to answer before the next period drains the command rings: their
+        // commands then take effect one period sooner
+        sleep_until(anchor + (int64_t)tick * l->period_ns + l->period_ns / COMMAND_WINDOW_DIV);
       }
     }
   }
