@@ -29,7 +29,6 @@
 
 #define DRIVE_HISTORY 1024          /* drive samples kept (1 s at 1 kHz)            */
 #define CATCH_UP_LIMIT 50           /* periods behind before the clock is re-anchored */
-#define COMMAND_WINDOW_DIV 10       /* tick pacing: wait period/10 after a tick before draining */
 #define STACK_PREFAULT (256 * 1024) /* bytes of stack touched before the loop        */
 #define PHYSICS_STACK (1024 * 1024) /* the physics thread's whole stack                */
 
@@ -364,8 +363,7 @@ static void physics_step(urt_loop_t *l, int k) {
   }
 }
 
-// Store tick's snapshot in the history (readers cannot see it until announce_tick).
-static void write_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
+static void publish_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
   urt_snapshot_t *s = &l->snap;
   urt_snapshot_fill(l->m, &l->c, &l->d, s);
   s->tick = tick;
@@ -381,10 +379,6 @@ static void write_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
   }
   s->cmd_dropped = dropped;
   urt_seqlock_write(&l->history[tick % URT_LOOP_HISTORY], s);
-}
-
-// Make tick the newest and wake its readers.
-static void announce_tick(urt_loop_t *l, uint64_t tick) {
   atomic_store_explicit(&l->latest_tick, tick, memory_order_release);
   atomic_store(&l->futex_word, (uint32_t)tick);
   if (atomic_load(&l->waiters) > 0) {
@@ -437,10 +431,7 @@ static void *physics_main(void *arg) {
     tick++;
     int64_t end = now_ns();
     int64_t exec = busy + (end - start);
-    write_snapshot(l, tick, exec);
-    if (pacing != URT_PACING_TICK) {
-      announce_tick(l, tick);
-    }
+    publish_snapshot(l, tick, exec);
     atomic_store_explicit(&l->exec_last_ns, (uint64_t)exec, memory_order_relaxed);
     if ((uint64_t)exec > atomic_load_explicit(&l->exec_max_ns, memory_order_relaxed)) {
       atomic_store_explicit(&l->exec_max_ns, (uint64_t)exec, memory_order_relaxed);
@@ -459,14 +450,7 @@ static void *physics_main(void *arg) {
         }
       }
       if (pacing == URT_PACING_TICK) {
-        // the state at time k·P goes out at wall time k·P: readers see it on the clock's beat,
-        // not whenever this period's computation happened to end (that varies by ~100 µs)
         sleep_until(anchor + (int64_t)tick * l->period_ns);
-        announce_tick(l, tick);
-        // a short window for the readers woken by this tick (the URScript runner, the native
-        // rtde_control loop) to answer before the next period drains the command rings: their
-        // commands then take effect one period sooner
-        sleep_until(anchor + (int64_t)tick * l->period_ns + l->period_ns / COMMAND_WINDOW_DIV);
       }
     }
   }
