@@ -393,7 +393,8 @@ static void test_lcm_loop__free_pacing_sends_or_counts_every_tick(void **state) 
   print_message("free pacing: %lu ticks in 1 s, sent %lu, lost %lu, received %ld\n",
                 (unsigned long)ticks, (unsigned long)st.status_sent,
                 (unsigned long)st.ticks_lost, l.count);
-  assert_true(ticks > 100);
+  assert_true(ticks > 10);  // free pacing runs as fast as it can: under sanitizers that is
+                            // below real time; what matters is that every tick is sent or counted
   assert_int_equal(st.status_sent + st.ticks_lost, ticks);
   assert_int_equal(st.last_tick, ticks);
   assert_int_equal(l.count, (long)st.status_sent);
