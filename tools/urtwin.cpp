@@ -94,6 +94,13 @@ long resident_kib() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // before any port opens: a client may connect and a supervisor may stop us at once
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+
   Options o;
   CLI::App app{"urtwin: a real-time emulator of a Universal Robots UR5 (physics + UR network ports)"};
   app.add_option("-c,--config", o.config, "robot parameter file")->capture_default_str();
@@ -230,11 +237,6 @@ int main(int argc, char** argv) {
     }
   }
 
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-  signal(SIGPIPE, SIG_IGN);
 
   urt_loop_start(loop);
   urt_emulator_start(emu);
