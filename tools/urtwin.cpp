@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--drive-rate", o.drive_rate, "LCM drive message rate [Hz]")
       ->check(CLI::Range(0.0, 20000.0))->capture_default_str();
-  app.add_option("--rt-priority", o.rt_priority, "SCHED_FIFO priority of the physics thread (0: none)")
+  app.add_option("--rt-priority", o.rt_priority, "SCHED_FIFO priority of the physics thread; the I/O and script threads get one less (0: none)")
       ->check(CLI::Range(0, 99))->capture_default_str();
   app.add_flag("--lock-memory", o.lock_memory, "mlockall and prefault the physics thread's stack");
   app.add_option("--programs-dir", o.programs_dir,

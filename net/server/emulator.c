@@ -438,7 +438,9 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
       .write_output_register = host_write_output_register,
       .model = host_model,
   };
-  if (urt_runner_create(&host, NULL, &e->runner) != 0) {
+  // the script thread shares the I/O thread's priority: both feed the physics thread's rings
+  urt_runner_config_t rcfg = {.rt_priority = e->cfg.rt_priority};
+  if (urt_runner_create(&host, &rcfg, &e->runner) != 0) {
     snprintf(err, err_sz, "cannot start the URScript runner");
     urt_emulator_destroy(e);
     return URT_EIO;

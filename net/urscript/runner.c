@@ -11,6 +11,7 @@
 #define _GNU_SOURCE
 #endif
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -289,6 +290,14 @@ int urt_runner_create(const urt_script_host_t *host, const urt_runner_config_t *
   pthread_attr_setstacksize(&attr, 8u << 20);
   int rc = pthread_create(&r->thread, &attr, thread_main, r);
   pthread_attr_destroy(&attr);
+  if (rc == 0 && r->cfg.rt_priority > 0) {
+    struct sched_param sp = {.sched_priority = r->cfg.rt_priority};
+    int prc = pthread_setschedparam(r->thread, SCHED_FIFO, &sp);
+    if (prc != 0) {
+      fprintf(stderr, "urtwin: warning: SCHED_FIFO priority %d for the script thread refused (%s)\n",
+              r->cfg.rt_priority, strerror(prc));
+    }
+  }
   if (rc != 0) {
     pthread_cond_destroy(&r->idle_cv);
     pthread_cond_destroy(&r->cv);

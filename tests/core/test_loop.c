@@ -78,8 +78,9 @@ static void test_loop__tick_pacing_follows_wall_time(void **state) {
   assert_int_equal(gaps, 0);
   // simulation never runs ahead of the wall clock by more than the period being computed; when
   // the machine is too slow to keep up (sanitizers, load), the lateness is counted, not hidden
+  // (judged at twice the ideal wall time: this reader can itself be preempted for a while)
   assert_true(wall > 0.5 - 0.002 - 1e-3);
-  if (wall > 0.55) {
+  if (wall > 1.0) {
     assert_true(st.overruns > 0);
   }
   // the arm rests at its initial pose

@@ -18,6 +18,26 @@ URTWIN = os.path.join(BUILD, "tools", "urtwin")
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 CONFIG = os.path.join(ROOT, "config", "ur5.yaml")
 
+
+
+def _realtime_permitted():
+    """Whether this user may run threads under SCHED_FIFO (root with CAP_SYS_NICE, or an
+    RLIMIT_RTPRIO): chrt is util-linux's, present on every Debian."""
+    try:
+        return subprocess.run(["chrt", "-f", "1", "true"], capture_output=True,
+                              timeout=5).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+
+
+# The emulators run in their real-time configuration when the machine permits it (as root here
+# and in CI): a real controller runs the script and the streams in its own cycle, while urtwin's
+# script and I/O threads are ordinary threads that, under SCHED_OTHER on a loaded 2-core box,
+# now and then wake a tick late (an interpreted servoj loop then falls behind controller time).
+# Set URT_TEST_RT=0 to test the default scheduling.
+RT_ARGS = (["--rt-priority", "80"]
+           if os.environ.get("URT_TEST_RT", "1") != "0" and _realtime_permitted() else [])
+
 # a different loopback address per emulator started by this process (and per pytest worker)
 _hosts = itertools.count(2 + (os.getpid() % 50) * 4)
 
@@ -47,7 +67,7 @@ class Emulator:
         self.host = host or next_host()
         self.version = version
         self.args = [URTWIN, "--config", CONFIG, "--bind", self.host, "--controller-version",
-                     version, "--stats-every", "0", *args]
+                     version, "--stats-every", "0", *RT_ARGS, *args]
         self.proc = None
         self.start_time = None
 

@@ -28,7 +28,8 @@ typedef struct urt_emulator_config {
   const char *programs_dir;  /* where dashboard `load` finds programs; NULL: none       */
   int local_control;         /* e-Series: 1 = local control (dashboard refuses changes) */
   const char *serial_number; /* digits; NULL: "20235501783"                            */
-  int rt_priority;           /* > 0: SCHED_FIFO priority of the I/O thread (best effort) */
+  int rt_priority;           /* > 0: SCHED_FIFO priority of the I/O and script threads
+                                (best effort)                                              */
 } urt_emulator_config_t;
 
 /* Per-port counters (readable while running, approximately). */

@@ -85,6 +85,9 @@ typedef struct urt_runner_config {
   int64_t step_budget;   /* interpreter steps allowed between two controller ticks before
                             "Runtime is too much behind" (0: default 200000)               */
   int wait_timeout_ms;   /* timeout handed to wait_tick (0: default 20)                    */
+  int rt_priority;       /* > 0: SCHED_FIFO priority of the script thread (best effort): a
+                            real controller runs the script in its own cycle, so a script
+                            thread that wakes late would fall behind controller time     */
 } urt_runner_config_t;
 
 typedef struct urt_runner urt_runner_t;
