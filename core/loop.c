@@ -60,6 +60,7 @@ struct urt_loop {
   _Atomic uint32_t futex_word;      /* low bits of latest_tick, for futex waits */
   _Atomic int waiters;
   _Atomic int notify_fd;            /* eventfd written after each tick, or -1   */
+  atomic_bool notify_busy;          /* the physics thread holds a notify_fd value */
 
   /* lockstep */
   _Atomic uint64_t granted;         /* ticks allowed so far */
@@ -269,7 +270,16 @@ int urt_loop_read_drive(const urt_loop_t *l, uint64_t seq, urt_drive_sample_t *o
   return read_slot(l->drive_history, DRIVE_HISTORY, seq, out);
 }
 
-void urt_loop_set_notify_fd(urt_loop_t *l, int eventfd) { atomic_store(&l->notify_fd, eventfd); }
+void urt_loop_set_notify_fd(urt_loop_t *l, int eventfd) {
+  atomic_store(&l->notify_fd, eventfd);
+  // acknowledge: once notify_busy reads false after the store, the physics thread has either
+  // finished with the old fd or will load the new one (sequentially consistent order: it raises
+  // notify_busy before it loads the fd); its write takes microseconds
+  while (atomic_load(&l->notify_busy)) {
+    struct timespec ts = {0, 20000};
+    nanosleep(&ts, NULL);
+  }
+}
 
 void urt_loop_grant(urt_loop_t *l, uint64_t n) {
   atomic_fetch_add(&l->granted, n);
@@ -384,13 +394,15 @@ static void publish_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
   if (atomic_load(&l->waiters) > 0) {
     futex_wake_all(&l->futex_word);
   }
-  int fd = atomic_load_explicit(&l->notify_fd, memory_order_acquire);
+  atomic_store(&l->notify_busy, true);
+  int fd = atomic_load(&l->notify_fd);
   if (fd >= 0) {
     // the I/O thread waits in epoll: one non-blocking eventfd write instead of a relay thread
     uint64_t one = 1;
     ssize_t rc = write(fd, &one, sizeof one);
     (void)rc;  // EAGAIN: the counter is full, the reader is woken anyway
   }
+  atomic_store(&l->notify_busy, false);
 }
 
 // Lockstep: sleep until a tick is granted (or stop). The only wait the physics thread does

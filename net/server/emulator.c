@@ -476,10 +476,7 @@ void urt_emulator_destroy(urt_emulator_t *e) {
     return;
   }
   urt_emulator_stop(e);
-  urt_loop_set_notify_fd(e->loop, -1);
-  // a running loop may be writing the old fd in the tick under way: let two ticks pass
-  uint64_t t = urt_loop_latest_tick(e->loop);
-  urt_loop_wait(e->loop, urt_loop_wait(e->loop, t, 100), 100);
+  urt_loop_set_notify_fd(e->loop, -1);  // returns once the loop is done with tick_fd
   urt_runner_destroy(e->runner);
   while (e->clients) {
     close_client(e, e->clients);

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
+#include <sys/eventfd.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -91,6 +92,34 @@ static void test_loop__tick_pacing_follows_wall_time(void **state) {
   urt_loop_destroy(l);
 }
 
+// The notify eventfd is written once per tick, and never again once urt_loop_set_notify_fd(-1)
+// has returned (the fd may then be closed, and its number reused, at once).
+static void test_loop__notify_fd_released_when_removed(void **state) {
+  (void)state;
+  urt_loop_t *l = make_loop(URT_PACING_FREE, 0);
+  int fd = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  assert_true(fd >= 0);
+  urt_loop_set_notify_fd(l, fd);
+  assert_int_equal(urt_loop_start(l), 0);
+  assert_true(urt_loop_wait(l, 200, 5000) > 200);
+  for (int k = 0; k < 50; k++) {
+    urt_loop_set_notify_fd(l, -1);
+    uint64_t count = 0;
+    (void)!read(fd, &count, sizeof count);  // drains the counter
+    uint64_t t = urt_loop_latest_tick(l);
+    assert_true(urt_loop_wait(l, t + 3, 5000) > t + 3);
+    assert_int_equal(read(fd, &count, sizeof count), -1);  // nothing written since
+    urt_loop_set_notify_fd(l, fd);
+    t = urt_loop_latest_tick(l);
+    assert_true(urt_loop_wait(l, t + 3, 5000) > t + 3);
+    assert_int_equal(read(fd, &count, sizeof count), (ssize_t)sizeof count);
+    assert_true(count > 0);
+  }
+  urt_loop_stop(l);
+  urt_loop_destroy(l);
+  close(fd);
+}
+
 // Lockstep: time advances only by the ticks granted.
 static void test_loop__lockstep_runs_only_granted_ticks(void **state) {
   (void)state;
@@ -151,6 +180,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_loop__refuses_fractional_period),
       cmocka_unit_test(test_loop__tick_pacing_follows_wall_time),
+      cmocka_unit_test(test_loop__notify_fd_released_when_removed),
       cmocka_unit_test(test_loop__lockstep_runs_only_granted_ticks),
       cmocka_unit_test(test_loop__commands_reach_the_controller),
       cmocka_unit_test(test_loop__drive_samples_at_their_rate),

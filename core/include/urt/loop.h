@@ -106,9 +106,9 @@ uint64_t urt_loop_latest_drive(const urt_loop_t *l);
 int urt_loop_read_drive(const urt_loop_t *l, uint64_t seq, urt_drive_sample_t *out);
 
 /* Also signal each new tick by writing 1 to an eventfd (non-blocking: a full counter is
- * simply not incremented), for a reader that waits in epoll. At most one; -1 removes it (the
- * physics thread may still write the old fd during the tick under way: wait for the next tick
- * before closing it). Context: non-RT. */
+ * simply not incremented), for a reader that waits in epoll. At most one; -1 removes it.
+ * Returns once the physics thread no longer uses the previous fd (it may then be closed): a
+ * wait of at most one eventfd write. Context: non-RT. */
 void urt_loop_set_notify_fd(urt_loop_t *l, int eventfd);
 
 /* Lockstep pacing: allow n more controller ticks. Other pacings ignore it. */
