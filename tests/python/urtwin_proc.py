@@ -85,6 +85,14 @@ class Emulator:
         return self
 
     def __exit__(self, *exc):
+        died = self.proc.poll() if self.proc else None
+        if died is not None:
+            # the emulator must outlive every client and every input: an exit before the test
+            # stops it is a failure of its own, reported with what it printed
+            self.out, self.err = self.proc.communicate()
+            self.returncode = died
+            raise AssertionError(f"urtwin exited by itself with {died}: "
+                                 f"{self.err.decode(errors='replace')[-2000:]}")
         if self.proc and self.proc.poll() is None:
             self.proc.send_signal(signal.SIGTERM)
             try:
