@@ -1,12 +1,20 @@
 // SPDX-License-Identifier: Apache-2.0
-// core/controller_internal.hpp — kinematics with a runtime TCP offset, shared by the controller
-// (core/controller.cpp) and the snapshot (core/snapshot.cpp). Internal. Context: RT.
+// core/controller_internal.hpp — what the controller's files (core/controller*.cpp) share, and
+// the kinematics with a runtime TCP offset that the snapshot (core/snapshot.cpp) uses too.
+// Internal. Context: RT.
 #ifndef URT_CORE_CONTROLLER_INTERNAL_HPP
 #define URT_CORE_CONTROLLER_INTERNAL_HPP
 
+#include <cmath>
+#include <cstdint>
+
 #include "arm.hpp"
+#include "urt/controller.h"
+#include "urt/core.h"
 
 namespace urt::core {
+
+// ---- kinematics (controller_kinematics.cpp) ----
 
 // The TCP (flange · offset, offset = x y z rx ry rz) at q: pose R_BT, p_BT in the base frame and,
 // if J is not null, the geometric Jacobian of the TCP point, rows (v; ω), base frame.
@@ -17,6 +25,26 @@ void tcp_kinematics(const urt_arm_params_t& a, const double tcp[6], const Vec6& 
 // Solve J x = b by damped least squares, x = Jᵀ (J Jᵀ + λ² 1)⁻¹ b; λ = 0 gives the exact
 // inverse (LU) for a well-conditioned J.
 Vec6 dls_solve(const Mat6& J, const Vec6& b, double lambda) noexcept;
+
+// ---- command checks (controller.cpp) ----
+
+// URT_PSTOP_* bit a joint target deserves (0: fine): non-finite, or outside the joint limits.
+uint32_t target_faults(const urt_model_t* m, const double* q) noexcept;
+
+// ---- small helpers ----
+
+// six doubles as a vector and back
+inline Vec6 vec6(const double* x) noexcept { return Eigen::Map<const Vec6>(x); }
+inline void put6(const Vec6& v, double* x) noexcept { Eigen::Map<Vec6>{x} = v; }
+
+inline bool all_finite(const double* x, int n) noexcept {
+  for (int i = 0; i < n; i++) {
+    if (!std::isfinite(x[i])) {
+      return false;
+    }
+  }
+  return true;
+}
 
 }  // namespace urt::core
 
