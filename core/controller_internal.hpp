@@ -31,6 +31,12 @@ Vec6 dls_solve(const Mat6& J, const Vec6& b, double lambda) noexcept;
 // URT_PSTOP_* bit a joint target deserves (0: fine): non-finite, or outside the joint limits.
 uint32_t target_faults(const urt_model_t* m, const double* q) noexcept;
 
+// ---- thermal (controller_thermal.cpp) ----
+
+// Advance every motor's winding temperature c->temperature by one period c->period, under the
+// copper loss of the motor current in d (exact for a loss constant over the period).
+void tick_thermal(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d) noexcept;
+
 // ---- small helpers ----
 
 // six doubles as a vector and back
