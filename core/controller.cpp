@@ -64,7 +64,6 @@ constexpr double kAccMargin = 0.9;      // planned accelerations up to this frac
 constexpr double kHaltDecel = 4.0;      // HALT and servo time-out deceleration [rad/s²]
 constexpr double kSliderRate = 2.0;     // speed_scaling slew rate [1/s]
 constexpr double kServoH = 2.5e-4;      // largest servo-filter integration step [s]
-constexpr double kFrictionVEps = 2e-3;  // speed over which the friction feed-forward turns on [rad/s]
 constexpr double kPauseRate = 4.0;      // pause_scale slew rate [1/s]: 0.25 s from full speed to rest
 constexpr int kTorqueTimeout = 4;       // periods without a TORQUE before the arm is stopped
 constexpr double kWrenchMaxF = 1000.0;  // SET_WRENCH / FORCE_MODE force bound per axis [N]
@@ -324,42 +323,6 @@ void hold_at(urt_ctrl_t* c, const Vec6& q) noexcept {
   std::memset(c->qd1, 0, sizeof c->qd1);
   std::memset(c->qdd0, 0, sizeof c->qdd0);
   std::memset(c->qdd1, 0, sizeof c->qdd1);
-}
-
-// inverse dynamics of the controller's arm model: the model's, with the controller's gravity
-void ctrl_rnea(const urt_model_t* m, const urt_ctrl_t* c, const Vec6& q, const Vec6& qd,
-               const Vec6& qdd, Vec6& tau) noexcept {
-  if (std::memcmp(c->gravity, m->arm.gravity, sizeof c->gravity) == 0) {
-    rnea(m->arm, q, qd, qdd, tau);
-    return;
-  }
-  urt_arm_params_t a = m->arm;
-  std::memcpy(a.gravity, c->gravity, sizeof a.gravity);
-  rnea(a, q, qd, qdd, tau);
-}
-
-// steady-state LuGre friction (σ0 z = g(q̇) sign q̇), faded in over a small speed
-double friction_ff(const urt_model_t* m, int j, double qd) noexcept {
-  if (!m->friction[j].enabled) {
-    return 0.0;
-  }
-  return urt_friction_g(&m->friction[j], qd) * std::tanh(qd / kFrictionVEps);
-}
-
-// the model feed-forward at a set-point
-void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const double* q, const double* qd,
-                  const double* qdd, double* tau) noexcept {
-  Vec6 t;
-  ctrl_rnea(m, c, vec6(q), vec6(qd), vec6(qdd), t);
-  for (int j = 0; j < URT_NJ; j++) {
-    tau[j] = t[j] + friction_ff(m, j, qd[j]) - c->tau_bias[j];
-  }
-}
-
-// joint torques within what the drives (and urt_command_set) accept
-double clamp_torque(const urt_model_t* m, int j, double tau) noexcept {
-  const double lim = 0.999 * m->joint[j].torque_max;
-  return std::fmax(-lim, std::fmin(lim, tau));
 }
 
 // torque-controlled joints: the set-point follows the arm (q, q̇ at the tick, q̈ their change),

@@ -31,6 +31,23 @@ Vec6 dls_solve(const Mat6& J, const Vec6& b, double lambda) noexcept;
 // URT_PSTOP_* bit a joint target deserves (0: fine): non-finite, or outside the joint limits.
 uint32_t target_faults(const urt_model_t* m, const double* q) noexcept;
 
+// ---- the controller's arm model and feed-forward (controller_feedforward.cpp) ----
+
+// Inverse dynamics of the controller's arm model: the model's, with the controller's gravity.
+void ctrl_rnea(const urt_model_t* m, const urt_ctrl_t* c, const Vec6& q, const Vec6& qd,
+               const Vec6& qdd, Vec6& tau) noexcept;
+
+// Steady-state LuGre friction of joint j at speed qd (σ0 z = g(q̇) sign q̇), faded in over a
+// small speed [N m].
+double friction_ff(const urt_model_t* m, int j, double qd) noexcept;
+
+// The model feed-forward at a set-point q, qd, qdd: τ = RNEA + friction − c->tau_bias [N m].
+void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const double* q, const double* qd,
+                  const double* qdd, double* tau) noexcept;
+
+// Joint j's torque within what the drives (and urt_command_set) accept [N m].
+double clamp_torque(const urt_model_t* m, int j, double tau) noexcept;
+
 // ---- thermal (controller_thermal.cpp) ----
 
 // Advance every motor's winding temperature c->temperature by one period c->period, under the
