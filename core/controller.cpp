@@ -1,21 +1,22 @@
 // SPDX-License-Identifier: Apache-2.0
-// core/controller.cpp — the UR controller's motion layer (urt/controller.h): robot and safety
-// state machine, motion generators (movej, movel, servoj, speedj, speedl, stopj, stopl, direct,
-// servol, servoc, direct torque, freedrive, force mode, pause),
-// the set-point interpolation the physics steps follow, model feed-forward, inverse kinematics
-// and the motor thermal model. Everything runs on the physics thread: fixed-size Eigen on the
-// stack, no allocation, no exceptions. Context: RT unless stated.
+// core/controller.cpp — the UR controller's state machine (urt/controller.h): robot and safety
+// modes, which commands are taken or refused, which motion runs (movej, movel, servoj, speedj,
+// speedl, stopj, stopl, direct, servol, servoc, direct torque, freedrive, force mode, pause)
+// and when its id is done, the speed slider and pause, the command checks and protective stops,
+// and the set-point interpolation the physics steps follow. The rest of the motion layer sits
+// beside it, one job a file: the motion generators (controller_motion.cpp), kinematics and IK
+// (controller_kinematics.cpp), the model feed-forward (controller_feedforward.cpp) and the motor
+// thermal model (controller_thermal.cpp); controller_internal.hpp is what they share.
+// Everything runs on the physics thread: fixed-size Eigen on the stack, no allocation, no
+// exceptions. Context: RT unless stated.
 //
-// Choices (the contract leaves them to this file):
+// Choices (the contract leaves them to the controller):
 // - Blending (r > 0) is not implemented: movej/movel stop at every target, as with r = 0.
 // - A movej/movel arriving while the set-point moves first brings the arm to rest at the new
 //   command's deceleration, then starts (c->pending); the previous motion's id is marked done.
 // - When not RUNNING, or in a protective stop, the set-point holds where the arm is (the brakes
 //   hold a real arm; here the drives, which stay engaged in the physics, do).
-// - Feed-forward: every set-point carries τ_ff = RNEA(q, q̇, q̈) + friction(q̇) − τ_bias, with
-//   τ_bias = g(q_init): urt_data_init starts the speed-loop integrators carrying g(q_init), so
-//   the feed-forward adds only the change from there. The speed loop's integral time is ~10 s
-//   (P_vel/I_vel), far too slow to take up gravity changes within a move.
+// - Feed-forward: every set-point carries the model's torque (controller_feedforward.cpp).
 // - The speed slider scales a planned motion's time (movej, movel): its path time advances at
 //   speed_scaling per second, and speed_scaling follows the slider at most 2 /s. servoj, speedj,
 //   speedl and stops are not scaled.
@@ -36,13 +37,15 @@
 //   no new TORQUE for 4 periods the drives return to position control, decelerate at 4 rad/s²
 //   and hold. Torques above torque_max are a protective stop.
 // - FREEDRIVE: τ = g(q) of the controller's gravity; held feature-frame axes (q[i] = 0) get a
-//   Cartesian spring-damper toward the pose freedrive began at (tick_freedrive).
+//   Cartesian spring-damper toward the pose freedrive began at (tick_freedrive in
+//   controller_motion.cpp).
 // - SERVOL: IK of the pose once per command (from the set-point), then servoj's filter. SERVOC:
 //   the tool twist ramps at a toward min(v, √(2 a d)) along the line to the goal; r is treated
 //   as 0 (no blending); its id is done on arrival.
 // - FORCE_MODE: a first-order admittance per compliant task-frame axis on the F/T reading
 //   d->wrench_ext (an ideal sensor), speed-limited; the other axes follow a speedl inside force
-//   mode (or hold) and are checked against their deviation limits (tick_force).
+//   mode (or hold) and are checked against their deviation limits (tick_force in
+//   controller_motion.cpp).
 #include <cmath>
 #include <cstring>
 

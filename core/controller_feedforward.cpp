@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // core/controller_feedforward.cpp — the controller's model of the arm: inverse dynamics with the
-// controller's gravity (SET_GRAVITY changes it, not the world's), the steady friction, and from
-// them the feed-forward torque every set-point carries, τ_ff = RNEA(q, q̇, q̈) + friction(q̇) −
-// τ_bias (τ_bias = g(q_init), which the speed-loop integrators carry from urt_data_init on).
-// Also the bound on any torque the controller hands the drives. No allocation. Context: RT.
+// controller's gravity (SET_GRAVITY changes it, not the world's), the steady friction, the
+// feed-forward torque every set-point carries, and the bound on any torque the controller hands
+// the drives. No allocation. Context: RT.
+//
+// Feed-forward: τ_ff = RNEA(q, q̇, q̈) + friction(q̇) − τ_bias, with τ_bias = g(q_init):
+// urt_data_init starts the speed-loop integrators carrying g(q_init), so the feed-forward adds
+// only the change from there. The speed loop's integral time is ~10 s (P_vel/I_vel), far too
+// slow to take up gravity changes within a move.
 #include <cmath>
 #include <cstring>
 
