@@ -1,21 +1,22 @@
 // SPDX-License-Identifier: Apache-2.0
-// core/controller.cpp — the UR controller's motion layer (urt/controller.h): robot and safety
-// state machine, motion generators (movej, movel, servoj, speedj, speedl, stopj, stopl, direct,
-// servol, servoc, direct torque, freedrive, force mode, pause),
-// the set-point interpolation the physics steps follow, model feed-forward, inverse kinematics
-// and the motor thermal model. Everything runs on the physics thread: fixed-size Eigen on the
-// stack, no allocation, no exceptions. Context: RT unless stated.
+// core/controller.cpp — the UR controller's state machine (urt/controller.h): robot and safety
+// modes, which commands are taken or refused, which motion runs (movej, movel, servoj, speedj,
+// speedl, stopj, stopl, direct, servol, servoc, direct torque, freedrive, force mode, pause)
+// and when its id is done, the speed slider and pause, the command checks and protective stops,
+// and the set-point interpolation the physics steps follow. The rest of the motion layer sits
+// beside it, one job a file: the motion generators (controller_motion.cpp), kinematics and IK
+// (controller_kinematics.cpp), the model feed-forward (controller_feedforward.cpp) and the motor
+// thermal model (controller_thermal.cpp); controller_internal.hpp is what they share.
+// Everything runs on the physics thread: fixed-size Eigen on the stack, no allocation, no
+// exceptions. Context: RT unless stated.
 //
-// Choices (the contract leaves them to this file):
+// Choices (the contract leaves them to the controller):
 // - Blending (r > 0) is not implemented: movej/movel stop at every target, as with r = 0.
 // - A movej/movel arriving while the set-point moves first brings the arm to rest at the new
 //   command's deceleration, then starts (c->pending); the previous motion's id is marked done.
 // - When not RUNNING, or in a protective stop, the set-point holds where the arm is (the brakes
 //   hold a real arm; here the drives, which stay engaged in the physics, do).
-// - Feed-forward: every set-point carries τ_ff = RNEA(q, q̇, q̈) + friction(q̇) − τ_bias, with
-//   τ_bias = g(q_init): urt_data_init starts the speed-loop integrators carrying g(q_init), so
-//   the feed-forward adds only the change from there. The speed loop's integral time is ~10 s
-//   (P_vel/I_vel), far too slow to take up gravity changes within a move.
+// - Feed-forward: every set-point carries the model's torque (controller_feedforward.cpp).
 // - The speed slider scales a planned motion's time (movej, movel): its path time advances at
 //   speed_scaling per second, and speed_scaling follows the slider at most 2 /s. servoj, speedj,
 //   speedl and stops are not scaled.
@@ -36,123 +37,36 @@
 //   no new TORQUE for 4 periods the drives return to position control, decelerate at 4 rad/s²
 //   and hold. Torques above torque_max are a protective stop.
 // - FREEDRIVE: τ = g(q) of the controller's gravity; held feature-frame axes (q[i] = 0) get a
-//   Cartesian spring-damper toward the pose freedrive began at (tick_freedrive).
+//   Cartesian spring-damper toward the pose freedrive began at (tick_freedrive in
+//   controller_motion.cpp).
 // - SERVOL: IK of the pose once per command (from the set-point), then servoj's filter. SERVOC:
 //   the tool twist ramps at a toward min(v, √(2 a d)) along the line to the goal; r is treated
 //   as 0 (no blending); its id is done on arrival.
 // - FORCE_MODE: a first-order admittance per compliant task-frame axis on the F/T reading
 //   d->wrench_ext (an ideal sensor), speed-limited; the other axes follow a speedl inside force
-//   mode (or hold) and are checked against their deviation limits (tick_force).
+//   mode (or hold) and are checked against their deviation limits (tick_force in
+//   controller_motion.cpp).
 #include <cmath>
 #include <cstring>
-
-#include <Eigen/Geometry>
-#include <Eigen/LU>
 
 #include "controller_internal.hpp"
 #include "step_internal.h"
 #include "urt/controller.h"
 #include "urt/core.h"
-#include "urt/drivers/friction.h"
 
 namespace urt::core {
 
 namespace {
 
-constexpr double kSpeedMargin = 0.98;   // planned speeds up to this fraction of qd_max
-constexpr double kAccMargin = 0.9;      // planned accelerations up to this fraction of qdd_max
 constexpr double kHaltDecel = 4.0;      // HALT and servo time-out deceleration [rad/s²]
 constexpr double kSliderRate = 2.0;     // speed_scaling slew rate [1/s]
-constexpr double kServoH = 2.5e-4;      // largest servo-filter integration step [s]
-constexpr double kFrictionVEps = 2e-3;  // speed over which the friction feed-forward turns on [rad/s]
 constexpr double kPauseRate = 4.0;      // pause_scale slew rate [1/s]: 0.25 s from full speed to rest
 constexpr int kTorqueTimeout = 4;       // periods without a TORQUE before the arm is stopped
 constexpr double kWrenchMaxF = 1000.0;  // SET_WRENCH / FORCE_MODE force bound per axis [N]
 constexpr double kWrenchMaxT = 200.0;   // and torque bound [N m]
 constexpr double kGravityMax = 100.0;   // SET_GRAVITY bound per axis (the loader's) [m/s²]
-constexpr double kForceGain = 0.005;    // force-mode admittance, translation [(m/s)/N]
-constexpr double kForceGainRot = 0.05;  // and rotation [(rad/s)/(N m)]
-constexpr double kForceAcc = 2.5;       // force-mode tool acceleration bound [m/s²]
-constexpr double kForceAccRot = 5.0;    // and angular [rad/s²]
-constexpr double kHoldK = 1e4;          // freedrive's spring on held axes, translation [N/m]
-constexpr double kHoldD = 300.0;        // and damper [N s/m]
-constexpr double kHoldKRot = 1000.0;    // rotation [N m/rad]
-constexpr double kHoldDRot = 20.0;      // [N m s/rad]
-constexpr uint32_t kAllJoints = (1u << URT_NJ) - 1u;
 
-// ---- plans, stored in c->plan (copied in and out once per tick) ----
-
-// Trapezoidal speed profile over a distance D: accelerate at ap for ta, cruise at vp, brake.
-struct Trap {
-  double D, T, ta, vp, ap;
-};
-
-struct MovejPlan {
-  Trap tr;
-  double q_start[URT_NJ], dq[URT_NJ];
-};
-
-struct MovelPlan {
-  Trap tr;
-  double p_start[3], dp[3];      // line: p = p_start + dp · s/D
-  double r_start[3];             // start orientation (rotation vector)
-  double axis[3], theta;         // R(s) = R_start · Rot(axis, θ s/D), axis in the start frame
-};
-
-struct StopPlan {
-  double a[URT_NJ];              // per-joint deceleration, all joints reach 0 together
-};
-
-struct SpeedjPlan {
-  double qd_goal[URT_NJ], a[URT_NJ];
-};
-
-struct SpeedlPlan {
-  double xd_goal[6], xd[6];      // goal and current tool twist (v; ω), base frame
-};
-
-struct ServojPlan {
-  double target[URT_NJ];
-  double since;                  // time since the last servoj [s]
-};
-
-struct TorquePlan {
-  double tau[URT_NJ];            // commanded joint torques [N m]
-  double friction;               // 1: add the friction model at the actual speed
-  double since;                  // time since the last TORQUE [s]
-};
-
-struct FreedrivePlan {
-  double free[6];                // feature-frame axes x y z rx ry rz: 1 free, 0 held
-  double feature[6];             // the feature frame (pose in the base frame)
-  double p_hold[3], r_hold[3];   // TCP pose when freedrive began (base frame)
-};
-
-struct ServocPlan {
-  double target[6];              // pose goal
-  double xd[6];                  // current tool twist (v; ω), base frame
-};
-
-struct ForcePlan {
-  double xd[6];                  // current tool twist (v; ω), base frame
-  double xd_goal[6];             // twist of the speedl running inside force mode, base frame
-};
-
-union Plan {
-  MovejPlan movej;
-  MovelPlan movel;
-  StopPlan stop;
-  SpeedjPlan speedj;
-  SpeedlPlan speedl;
-  ServojPlan servoj;
-  TorquePlan torque;
-  FreedrivePlan freedrive;
-  ServocPlan servoc;
-  ForcePlan force;
-  double raw[64];
-};
-static_assert(sizeof(Plan) == sizeof(((urt_ctrl_t*)nullptr)->plan), "plan fits c->plan");
-
+// plans are stored in c->plan (copied in and out once per tick)
 Plan load_plan(const urt_ctrl_t* c) noexcept {
   Plan p;
   std::memcpy(&p, c->plan, sizeof p);
@@ -161,82 +75,12 @@ Plan load_plan(const urt_ctrl_t* c) noexcept {
 
 void store_plan(urt_ctrl_t* c, const Plan& p) noexcept { std::memcpy(c->plan, &p, sizeof p); }
 
-// ---- trapezoid ----
+}  // namespace
 
-Trap trap_plan(double D, double v, double a, double t) noexcept {
-  Trap tr{D, 0.0, 0.0, 0.0, 0.0};
-  if (D <= 0.0) {
-    return tr;
-  }
-  if (t > 0.0) {
-    // fit the duration: keep a if it can make it in t, else the triangle that takes exactly t
-    double disc = a * a * t * t - 4.0 * a * D;
-    if (disc >= 0.0) {
-      v = 0.5 * (a * t - std::sqrt(disc));
-    } else {
-      a = 4.0 * D / (t * t);
-      v = 2.0 * D / t;
-    }
-  }
-  if (D * a <= v * v) {  // triangle
-    tr.ta = std::sqrt(D / a);
-    tr.vp = a * tr.ta;
-    tr.T = 2.0 * tr.ta;
-  } else {
-    tr.ta = v / a;
-    tr.vp = v;
-    tr.T = D / v + v / a;
-  }
-  tr.ap = tr.vp / tr.ta;
-  return tr;
-}
+// ---- command checks ----
 
-// distance, speed and acceleration along the trapezoid at time t
-void trap_eval(const Trap& tr, double t, double& s, double& sd, double& sdd) noexcept {
-  if (tr.D <= 0.0 || t >= tr.T) {
-    s = tr.D;
-    sd = sdd = 0.0;
-  } else if (t <= 0.0) {
-    s = sd = sdd = 0.0;
-  } else if (t < tr.ta) {
-    s = 0.5 * tr.ap * t * t;
-    sd = tr.ap * t;
-    sdd = tr.ap;
-  } else if (t <= tr.T - tr.ta) {
-    s = 0.5 * tr.ap * tr.ta * tr.ta + tr.vp * (t - tr.ta);
-    sd = tr.vp;
-    sdd = 0.0;
-  } else {
-    double r = tr.T - t;
-    s = tr.D - 0.5 * tr.ap * r * r;
-    sd = tr.ap * r;
-    sdd = -tr.ap;
-  }
-}
-
-// ---- small helpers ----
-
-Vec6 vec6(const double* x) noexcept { return Eigen::Map<const Vec6>(x); }
-void put6(const Vec6& v, double* x) noexcept { Eigen::Map<Vec6>{x} = v; }
-
-Vec6 actual_q(const urt_data_t* d) noexcept {
-  Vec6 q;
-  for (int j = 0; j < URT_NJ; j++) {
-    q[j] = d->x[j][URT_X_Q];
-  }
-  return q;
-}
-
-bool all_finite(const double* x, int n) noexcept {
-  for (int i = 0; i < n; i++) {
-    if (!std::isfinite(x[i])) {
-      return false;
-    }
-  }
-  return true;
-}
-
-// URT_PSTOP_* bit a joint target deserves (0: fine)
+// URT_PSTOP_* bit a joint target deserves (0: fine); inverse kinematics checks its candidates
+// with it too
 uint32_t target_faults(const urt_model_t* m, const double* q) noexcept {
   for (int j = 0; j < URT_NJ; j++) {
     if (!std::isfinite(q[j])) {
@@ -250,6 +94,29 @@ uint32_t target_faults(const urt_model_t* m, const double* q) noexcept {
   }
   return 0;
 }
+
+// ---- motion bookkeeping (the generators end their motions too) ----
+
+void mark_done(urt_ctrl_t* c, uint64_t id) noexcept {
+  if (id > c->motion_done_id) {
+    c->motion_done_id = id;
+  }
+}
+
+// end the current motion (finished or aborted): its id is done
+void finish_motion(urt_ctrl_t* c) noexcept {
+  mark_done(c, c->motion_id);
+  if (c->has_pending) {
+    mark_done(c, c->pending.id);
+    c->has_pending = 0;
+  }
+  c->motion = URT_MOTION_IDLE;
+  std::memset(c->tau_ff, 0, sizeof c->tau_ff);
+  c->torque_mask = 0;   // back to position control
+  c->force_mode = 0;
+}
+
+namespace {
 
 uint32_t speed_faults(const urt_model_t* m, const double* qd) noexcept {
   for (int j = 0; j < URT_NJ; j++) {
@@ -304,25 +171,6 @@ bool running(const urt_ctrl_t* c) noexcept {
   return c->robot_mode == URT_ROBOT_MODE_RUNNING && c->safety_mode == URT_SAFETY_MODE_NORMAL;
 }
 
-void mark_done(urt_ctrl_t* c, uint64_t id) noexcept {
-  if (id > c->motion_done_id) {
-    c->motion_done_id = id;
-  }
-}
-
-// end the current motion (finished or aborted): its id is done
-void finish_motion(urt_ctrl_t* c) noexcept {
-  mark_done(c, c->motion_id);
-  if (c->has_pending) {
-    mark_done(c, c->pending.id);
-    c->has_pending = 0;
-  }
-  c->motion = URT_MOTION_IDLE;
-  std::memset(c->tau_ff, 0, sizeof c->tau_ff);
-  c->torque_mask = 0;   // back to position control
-  c->force_mode = 0;
-}
-
 // hold the set-point at q, at rest (both ends of the current period)
 void hold_at(urt_ctrl_t* c, const Vec6& q) noexcept {
   put6(q, c->q0);
@@ -331,58 +179,6 @@ void hold_at(urt_ctrl_t* c, const Vec6& q) noexcept {
   std::memset(c->qd1, 0, sizeof c->qd1);
   std::memset(c->qdd0, 0, sizeof c->qdd0);
   std::memset(c->qdd1, 0, sizeof c->qdd1);
-}
-
-// inverse dynamics of the controller's arm model: the model's, with the controller's gravity
-void ctrl_rnea(const urt_model_t* m, const urt_ctrl_t* c, const Vec6& q, const Vec6& qd,
-               const Vec6& qdd, Vec6& tau) noexcept {
-  if (std::memcmp(c->gravity, m->arm.gravity, sizeof c->gravity) == 0) {
-    rnea(m->arm, q, qd, qdd, tau);
-    return;
-  }
-  urt_arm_params_t a = m->arm;
-  std::memcpy(a.gravity, c->gravity, sizeof a.gravity);
-  rnea(a, q, qd, qdd, tau);
-}
-
-// steady-state LuGre friction (σ0 z = g(q̇) sign q̇), faded in over a small speed
-double friction_ff(const urt_model_t* m, int j, double qd) noexcept {
-  if (!m->friction[j].enabled) {
-    return 0.0;
-  }
-  return urt_friction_g(&m->friction[j], qd) * std::tanh(qd / kFrictionVEps);
-}
-
-// the model feed-forward at a set-point
-void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const double* q, const double* qd,
-                  const double* qdd, double* tau) noexcept {
-  Vec6 t;
-  ctrl_rnea(m, c, vec6(q), vec6(qd), vec6(qdd), t);
-  for (int j = 0; j < URT_NJ; j++) {
-    tau[j] = t[j] + friction_ff(m, j, qd[j]) - c->tau_bias[j];
-  }
-}
-
-// joint torques within what the drives (and urt_command_set) accept
-double clamp_torque(const urt_model_t* m, int j, double tau) noexcept {
-  const double lim = 0.999 * m->joint[j].torque_max;
-  return std::fmax(-lim, std::fmin(lim, tau));
-}
-
-// torque-controlled joints: the set-point follows the arm (q, q̇ at the tick, q̈ their change),
-// so that the command checks, the snapshot's targets and the return to position control see
-// where the arm really is
-void follow_actual(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d,
-                   uint32_t mask) noexcept {
-  for (int j = 0; j < URT_NJ; j++) {
-    if (!((mask >> j) & 1u)) {
-      continue;
-    }
-    const double amax = kAccMargin * m->joint[j].qdd_max;
-    c->q1[j] = d->x[j][URT_X_Q];
-    c->qd1[j] = d->x[j][URT_X_QD];
-    c->qdd1[j] = std::fmax(-amax, std::fmin(amax, (c->qd1[j] - c->qd0[j]) / c->period));
-  }
 }
 
 void protective_stop(urt_ctrl_t* c, urt_data_t* d, uint32_t fault, uint32_t pstop_bits) noexcept {
@@ -418,26 +214,6 @@ double tcp_twist_decel_time(const urt_model_t* m, const urt_ctrl_t* c, double a,
   return std::fmax(x.head<3>().norm() / a, x.tail<3>().norm() / a_rot);
 }
 
-// start servoing to the joint target q (servoj, and servol on its IK); a command without a
-// time lasts one period
-void start_servoj(urt_ctrl_t* c, Plan& p, const double* q, urt_ctrl_motion_t motion) noexcept {
-  std::memcpy(p.servoj.target, q, sizeof p.servoj.target);
-  p.servoj.since = 0.0;
-  if (!(c->active.t > 0.0)) {
-    c->active.t = c->period;
-  }
-  c->motion = motion;
-}
-
-// start decelerating every joint to rest, all together, the leading one at a
-void start_stop(urt_ctrl_t* c, Plan& p, double t_stop) noexcept {
-  for (int j = 0; j < URT_NJ; j++) {
-    p.stop.a[j] = t_stop > 0.0 ? std::fabs(c->qd1[j]) / t_stop : 0.0;
-  }
-  c->motion = URT_MOTION_STOP;
-  c->seg_time = 0.0;
-}
-
 double joint_stop_time(const urt_ctrl_t* c, double a) noexcept {
   double vmax = 0.0;
   for (int j = 0; j < URT_NJ; j++) {
@@ -455,691 +231,12 @@ bool moving(const urt_ctrl_t* c) noexcept {
   return false;
 }
 
-// ---- planned motions ----
-
-bool start_movej(const urt_model_t* m, urt_ctrl_t* c, Plan& p,
-                 const urt_ctrl_cmd_t* cmd) noexcept {
-  MovejPlan& mj = p.movej;
-  double D = 0.0;
-  for (int j = 0; j < URT_NJ; j++) {
-    mj.q_start[j] = c->q1[j];
-    mj.dq[j] = cmd->q[j] - c->q1[j];
-    D = std::fmax(D, std::fabs(mj.dq[j]));
-  }
-  double v = cmd->v, a = cmd->a;
-  for (int j = 0; j < URT_NJ && D > 0.0; j++) {
-    double f = std::fabs(mj.dq[j]) / D;  // this joint's share of the leading axis' motion
-    if (f > 0.0) {
-      v = std::fmin(v, kSpeedMargin * m->joint[j].qd_max / f);
-      a = std::fmin(a, kAccMargin * m->joint[j].qdd_max / f);
-    }
-  }
-  if (cmd->t > 0.0) {
-    // t overrides a and v, but never beyond the joints' limits
-    Trap fit = trap_plan(D, v, a, cmd->t);
-    if (fit.vp <= v * 1.0000001 && fit.ap <= a * 1.0000001) {
-      mj.tr = fit;
-    } else {
-      mj.tr = trap_plan(D, v, a, 0.0);
-    }
-  } else {
-    mj.tr = trap_plan(D, v, a, 0.0);
-  }
-  c->motion = URT_MOTION_MOVEJ;
-  c->traj_time = 0.0;
-  c->seg_time = 0.0;
-  return true;
-}
-
-bool start_movel(const urt_model_t* m, urt_ctrl_t* c, Plan& p,
-                 const urt_ctrl_cmd_t* cmd) noexcept {
-  MovelPlan& ml = p.movel;
-  Mat3 R0;
-  Vec3 p0;
-  tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R0, p0, nullptr);
-  Vec3 p1(cmd->pose[0], cmd->pose[1], cmd->pose[2]);
-  Mat3 R1 = rotation_from_rotvec(Vec3(cmd->pose[3], cmd->pose[4], cmd->pose[5]));
-  Vec3 rel = rotvec_from_rotation(R0.transpose() * R1);
-  Vec3 dp = p1 - p0;
-  Vec3 r0 = rotvec_from_rotation(R0);
-  for (int i = 0; i < 3; i++) {
-    ml.p_start[i] = p0[i];
-    ml.dp[i] = dp[i];
-    ml.r_start[i] = r0[i];
-  }
-  ml.theta = rel.norm();
-  Vec3 axis = ml.theta > 0.0 ? Vec3(rel / ml.theta) : Vec3(0.0, 0.0, 1.0);
-  for (int i = 0; i < 3; i++) {
-    ml.axis[i] = axis[i];
-  }
-  // path length: the translation, or for a pure rotation the angle (a, v then in rad/s², rad/s)
-  double D = dp.norm() > 1e-7 ? dp.norm() : ml.theta;
-  ml.tr = trap_plan(D, cmd->v, cmd->a, cmd->t);
-  c->motion = URT_MOTION_MOVEL;
-  c->traj_time = 0.0;
-  c->seg_time = 0.0;
-  return true;
-}
-
-void tick_movej(urt_ctrl_t* c, Plan& p, double scale, double dscale) noexcept {
-  const MovejPlan& mj = p.movej;
-  double s, sd, sdd;
-  trap_eval(mj.tr, c->traj_time, s, sd, sdd);
-  double D = mj.tr.D;
-  for (int j = 0; j < URT_NJ; j++) {
-    double f = D > 0.0 ? mj.dq[j] / D : 0.0;
-    c->q1[j] = mj.q_start[j] + f * s;
-    c->qd1[j] = f * sd * scale;
-    c->qdd1[j] = f * (sdd * scale * scale + sd * dscale);
-  }
-  if (c->traj_time >= mj.tr.T) {
-    for (int j = 0; j < URT_NJ; j++) {
-      c->q1[j] = mj.q_start[j] + mj.dq[j];
-      c->qd1[j] = c->qdd1[j] = 0.0;
-    }
-    finish_motion(c);
-  }
-}
-
-// returns false when the line left the workspace (no IK)
-bool tick_movel(const urt_model_t* m, urt_ctrl_t* c, Plan& p, double scale) noexcept {
-  const MovelPlan& ml = p.movel;
-  double s, sd, sdd;
-  bool end = c->traj_time >= ml.tr.T;
-  trap_eval(ml.tr, c->traj_time, s, sd, sdd);
-  double u = ml.tr.D > 0.0 ? s / ml.tr.D : 1.0, ud = ml.tr.D > 0.0 ? sd * scale / ml.tr.D : 0.0;
-  Vec3 axis(ml.axis[0], ml.axis[1], ml.axis[2]);
-  Mat3 R0 = rotation_from_rotvec(Vec3(ml.r_start[0], ml.r_start[1], ml.r_start[2]));
-  Mat3 R = R0 * rotation_from_rotvec(axis * (ml.theta * u));
-  Vec3 pos(ml.p_start[0] + ml.dp[0] * u, ml.p_start[1] + ml.dp[1] * u,
-           ml.p_start[2] + ml.dp[2] * u);
-  Vec3 r = rotvec_from_rotation(R);
-  double pose[6] = {pos[0], pos[1], pos[2], r[0], r[1], r[2]};
-  double q[URT_NJ];
-  if (urt_ctrl_inverse_kinematics_tcp(m, c->tcp_offset, pose, c->q1, q) != URT_OK) {
-    return false;
-  }
-  Vec6 twist;
-  twist << ml.dp[0] * ud, ml.dp[1] * ud, ml.dp[2] * ud, R0 * axis * (ml.theta * ud);
-  Mat3 Rq;
-  Vec3 pq;
-  Mat6 J;
-  tcp_kinematics(m->arm, c->tcp_offset, vec6(q), Rq, pq, &J);
-  Vec6 qd = dls_solve(J, twist, 0.0);
-  for (int j = 0; j < URT_NJ; j++) {
-    c->q1[j] = q[j];
-    c->qd1[j] = end ? 0.0 : qd[j];
-    c->qdd1[j] = (c->qd1[j] - c->qd0[j]) / c->period;
-  }
-  if (end) {
-    std::memset(c->qdd1, 0, sizeof c->qdd1);
-    finish_motion(c);
-  }
-  return true;
-}
-
-// ---- online motions ----
-
-void tick_stop(urt_ctrl_t* c, const Plan& p) noexcept {
-  const double T = c->period;
-  bool rest = true;
-  for (int j = 0; j < URT_NJ; j++) {
-    double v0 = c->qd0[j], dv = p.stop.a[j] * T;
-    double v1 = std::fabs(v0) <= dv ? 0.0 : v0 - std::copysign(dv, v0);
-    c->qd1[j] = v1;
-    c->q1[j] = c->q0[j] + 0.5 * (v0 + v1) * T;
-    c->qdd1[j] = (v1 - v0) / T;
-    rest = rest && v1 == 0.0;
-  }
-  if (rest) {
-    std::memset(c->qdd1, 0, sizeof c->qdd1);
-  }
-}
-
-void tick_speedj(urt_ctrl_t* c, const Plan& p) noexcept {
-  const double T = c->period;
-  bool reached = true;
-  for (int j = 0; j < URT_NJ; j++) {
-    double v0 = c->qd0[j], g = p.speedj.qd_goal[j], dv = p.speedj.a[j] * T;
-    double v1 = std::fabs(g - v0) <= dv ? g : v0 + std::copysign(dv, g - v0);
-    c->qd1[j] = v1;
-    c->q1[j] = c->q0[j] + 0.5 * (v0 + v1) * T;
-    c->qdd1[j] = (v1 - v0) / T;
-    reached = reached && v1 == g;
-  }
-  if (reached && c->active.t <= 0.0) {
-    mark_done(c, c->motion_id);  // speedj without t returns once the speed is reached
-  }
-}
-
-// ramp a vector toward a goal by at most step (along the difference)
-void ramp3(double* x, const double* goal, double step) noexcept {
-  Vec3 d(goal[0] - x[0], goal[1] - x[1], goal[2] - x[2]);
-  double n = d.norm();
-  double k = n <= step ? 1.0 : step / n;
-  for (int i = 0; i < 3; i++) {
-    x[i] += k * d[i];
-  }
-}
-
-// damping of the inverse Jacobian near singularities (manipulability |det J|)
-double dls_lambda(const Mat6& J) noexcept {
-  constexpr double w0 = 1e-3, lambda0 = 0.05;
-  double w = std::fabs(J.determinant());
-  return w >= w0 ? 0.0 : lambda0 * std::sqrt(1.0 - (w / w0) * (w / w0));
-}
-
-void tick_speedl(const urt_model_t* m, urt_ctrl_t* c, Plan& p) noexcept {
-  const double T = c->period;
-  SpeedlPlan& sl = p.speedl;
-  double a_rot = c->active.a_rot > 0.0 ? c->active.a_rot : c->active.a;
-  ramp3(sl.xd, sl.xd_goal, c->active.a * T);
-  ramp3(sl.xd + 3, sl.xd_goal + 3, a_rot * T);
-  Mat3 R;
-  Vec3 pos;
-  Mat6 J;
-  tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q0), R, pos, &J);
-  Vec6 qd = dls_solve(J, vec6(sl.xd), dls_lambda(J));
-  for (int j = 0; j < URT_NJ; j++) {
-    double v0 = c->qd0[j];
-    c->qd1[j] = qd[j];
-    c->q1[j] = c->q0[j] + 0.5 * (v0 + qd[j]) * T;
-    c->qdd1[j] = (qd[j] - v0) / T;
-  }
-  bool reached = true;
-  for (int i = 0; i < 6; i++) {
-    reached = reached && sl.xd[i] == sl.xd_goal[i];
-  }
-  if (reached && c->active.t <= 0.0) {
-    mark_done(c, c->motion_id);
-  }
-}
-
-// q̈_s = gain (q_target − q_s − lookahead q̇_s) on the set-point: a ramp is followed with a lag
-// of exactly lookahead; speeds and accelerations clamped to the joint limits
-void tick_servoj(const urt_model_t* m, urt_ctrl_t* c, Plan& p) noexcept {
-  const double T = c->period, gain = c->active.gain, la = c->active.lookahead_time;
-  int n = (int)std::ceil(T / kServoH - 1e-9);
-  double h = T / n;
-  for (int j = 0; j < URT_NJ; j++) {
-    double q = c->q0[j], v = c->qd0[j], a = 0.0;
-    double vmax = kSpeedMargin * m->joint[j].qd_max, amax = kAccMargin * m->joint[j].qdd_max;
-    for (int k = 0; k < n; k++) {
-      a = gain * (p.servoj.target[j] - q - la * v);
-      a = std::fmax(-amax, std::fmin(amax, a));
-      double v1 = std::fmax(-vmax, std::fmin(vmax, v + a * h));
-      q += 0.5 * (v + v1) * h;
-      v = v1;
-    }
-    c->q1[j] = q;
-    c->qd1[j] = v;
-    c->qdd1[j] = (v - c->qd0[j]) / T;
-  }
-  p.servoj.since += T;
-  if (p.servoj.since >= c->active.t) {
-    mark_done(c, c->motion_id);  // the call has controlled the robot for its t
-  }
-}
-
-// integrate a tool twist into the set-point through the damped inverse Jacobian at q0
-void twist_to_joints(const urt_model_t* m, urt_ctrl_t* c, const Vec6& xd) noexcept {
-  const double T = c->period;
-  Mat3 R;
-  Vec3 pos;
-  Mat6 J;
-  tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q0), R, pos, &J);
-  Vec6 qd = dls_solve(J, xd, dls_lambda(J));
-  for (int j = 0; j < URT_NJ; j++) {
-    double v0 = c->qd0[j];
-    c->qd1[j] = qd[j];
-    c->q1[j] = c->q0[j] + 0.5 * (v0 + qd[j]) * T;
-    c->qdd1[j] = (qd[j] - v0) / T;
-  }
-}
-
-// servoc: the tool twist ramps (at a) toward the straight line to the goal at the speed that
-// can still stop there, min(v, √(2 a d), d/T); the orientation turns in proportion so that both
-// arrive together (at most 1 rad/s, 4 rad/s², alone once the position is there). Blending
-// (r) is not done: each new goal is approached from the current set-point and twist. Returns
-// true when the goal is reached (the set-point then sits on it at rest).
-bool tick_servoc(const urt_model_t* m, urt_ctrl_t* c, Plan& p) noexcept {
-  constexpr double kRotV = 1.0, kRotA = 4.0;
-  const double T = c->period, a = c->active.a, v = c->active.v;
-  ServocPlan& sc = p.servoc;
-  Mat3 R;
-  Vec3 pos;
-  tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q0), R, pos, nullptr);
-  const Vec3 p_goal(sc.target[0], sc.target[1], sc.target[2]);
-  const Mat3 R_goal = rotation_from_rotvec(Vec3(sc.target[3], sc.target[4], sc.target[5]));
-  const Vec3 dp = p_goal - pos;
-  const Vec3 rot = R * rotvec_from_rotation(R.transpose() * R_goal);  // base frame
-  const double dist = dp.norm(), theta = rot.norm();
-  const Vec6 xd_now = vec6(sc.xd);
-
-  // arrived: land on the goal exactly (IK) and rest
-  if (dist < 2e-5 && theta < 2e-4 && xd_now.head<3>().norm() <= 2.0 * a * T &&
-      xd_now.tail<3>().norm() <= 2.0 * kRotA * T) {
-    double q[URT_NJ];
-    if (urt_ctrl_inverse_kinematics_tcp(m, c->tcp_offset, sc.target, c->q0, q) == URT_OK) {
-      std::memcpy(c->q1, q, sizeof c->q1);
-    }
-    std::memset(c->qd1, 0, sizeof c->qd1);
-    std::memset(c->qdd1, 0, sizeof c->qdd1);
-    std::memset(sc.xd, 0, sizeof sc.xd);
-    return true;
-  }
-
-  // desired twist, then ramp the twist toward it
-  double vd = std::fmin(v, std::fmin(std::sqrt(2.0 * a * dist), dist / T));
-  Vec3 v_des = dist > 1e-12 ? Vec3(dp * (vd / dist)) : Vec3::Zero();
-  double wd = std::fmin(kRotV, std::fmin(std::sqrt(2.0 * kRotA * theta), theta / T));
-  if (dist > 1e-6) {
-    wd = std::fmin(wd, theta * vd / dist);
-  }
-  Vec3 w_des = theta > 1e-12 ? Vec3(rot * (wd / theta)) : Vec3::Zero();
-  ramp3(sc.xd, v_des.data(), a * T);
-  ramp3(sc.xd + 3, w_des.data(), kRotA * T);
-  twist_to_joints(m, c, vec6(sc.xd));
-  return false;
-}
-
-// force mode's task frame (UR types): 1 — y from the TCP toward the frame's origin; 2 — the
-// frame as given; 3 — x along the TCP velocity projected on the frame's x-y plane
-Mat3 force_task_frame(const urt_ctrl_cmd_t& f, const Vec3& p_tcp, const Vec3& v_tcp) noexcept {
-  const Mat3 Rf = rotation_from_rotvec(Vec3(f.pose[3], f.pose[4], f.pose[5]));
-  const Vec3 pf(f.pose[0], f.pose[1], f.pose[2]);
-  Mat3 Rt = Rf;
-  if (f.index == 1) {
-    Vec3 y = pf - p_tcp;
-    Vec3 z = Rf.col(2) - Rf.col(2).dot(y.normalized()) * y.normalized();
-    if (y.norm() > 1e-6 && z.norm() > 1e-6) {
-      y.normalize();
-      z.normalize();
-      Rt.col(0) = y.cross(z);
-      Rt.col(1) = y;
-      Rt.col(2) = z;
-    }
-  } else if (f.index == 3) {
-    const Vec3 z = Rf.col(2);
-    Vec3 x = v_tcp - v_tcp.dot(z) * z;
-    if (x.norm() > 1e-6) {
-      x.normalize();
-      Rt.col(0) = x;
-      Rt.col(1) = z.cross(x);
-      Rt.col(2) = z;
-    }
-  }
-  return Rt;
-}
-
-// force mode, a first-order admittance in the task frame. With the F/T reading w_ext (the wrench
-// the environment applies at the TCP, d->wrench_ext: an ideal sensor) and the commanded wrench
-// w_cmd (what the robot shall apply to the environment), each compliant axis i moves at
-//   v_i = sat_{±limit_i}( k_i (w_cmd,i + w_ext,i) ),   k = 0.005 (m/s)/N, 0.05 (rad/s)/(N m),
-// which is at rest exactly when the environment pushes back with −w_cmd. Non-compliant axes
-// move with the speedl running inside force mode (else hold). The twist ramps at 2.5 m/s²,
-// 5 rad/s². Returns false when a non-compliant axis deviates from the set-point by more than
-// its limit (> 0).
-bool tick_force(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, Plan& p) noexcept {
-  const double T = c->period;
-  const urt_ctrl_cmd_t& f = c->force;
-  ForcePlan& fp = p.force;
-  Mat3 R;
-  Vec3 pos;
-  Mat6 J;
-  tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q0), R, pos, &J);
-  const Vec6 x_now = J * vec6(c->qd0);
-  const Mat3 Rt = force_task_frame(f, pos, x_now.head<3>());
-
-  // the wrench and the speedl goal in the task frame
-  const Mat3 Rt_T = Rt.transpose();
-  Vec6 w_t, g_t;
-  for (int h = 0; h < 2; h++) {
-    const Vec3 w(d->wrench_ext[3 * h], d->wrench_ext[3 * h + 1], d->wrench_ext[3 * h + 2]);
-    const Vec3 g(fp.xd_goal[3 * h], fp.xd_goal[3 * h + 1], fp.xd_goal[3 * h + 2]);
-    const Vec3 wt = Rt_T * w, gt = Rt_T * g;
-    for (int i = 0; i < 3; i++) {
-      w_t[3 * h + i] = wt[i];
-      g_t[3 * h + i] = gt[i];
-    }
-  }
-  Vec6 v_t;
-  for (int i = 0; i < 6; i++) {
-    if (f.q[i] != 0.0) {
-      const double k = i < 3 ? kForceGain : kForceGainRot;
-      v_t[i] = std::fmax(-f.qd[i], std::fmin(f.qd[i], k * (f.tau[i] + w_t[i])));
-    } else {
-      v_t[i] = g_t[i];
-    }
-  }
-  Vec3 v_des = Rt * v_t.head<3>(), w_des = Rt * v_t.tail<3>();
-  ramp3(fp.xd, v_des.data(), kForceAcc * T);
-  ramp3(fp.xd + 3, w_des.data(), kForceAccRot * T);
-  twist_to_joints(m, c, vec6(fp.xd));
-
-  // deviation limits of the non-compliant axes: the arm against its set-point
-  Mat3 Ra, Rs;
-  Vec3 pa, ps;
-  Vec6 qa;
-  for (int j = 0; j < URT_NJ; j++) {
-    qa[j] = d->x[j][URT_X_Q];
-  }
-  tcp_kinematics(m->arm, c->tcp_offset, qa, Ra, pa, nullptr);
-  tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), Rs, ps, nullptr);
-  const Vec3 dev_p = Rt_T * Vec3(pa - ps);
-  const Vec3 dev_r = Rt_T * Vec3(Rs * rotvec_from_rotation(Rs.transpose() * Ra));
-  const double dev[6] = {dev_p[0], dev_p[1], dev_p[2], dev_r[0], dev_r[1], dev_r[2]};
-  for (int i = 0; i < 6; i++) {
-    if (f.q[i] == 0.0 && f.qd[i] > 0.0 && std::fabs(dev[i]) > f.qd[i]) {
-      return false;
-    }
-  }
-  return true;
-}
-
-// freedrive: every drive in torque mode carrying the controller's gravity model, so that only
-// friction and the drives' inertia resist a push. Held axes of the feature frame (free[i] = 0)
-// get a Cartesian spring-damper toward the pose freedrive began at, τ += Jᵀ w with
-// w = K e − D v per held axis (10 kN/m, 300 N s/m; 1000 N m/rad, 20 N m s/rad): a push on a
-// held axis deflects it by about |F|/K plus what friction holds.
-void tick_freedrive(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, Plan& p) noexcept {
-  const FreedrivePlan& fd = p.freedrive;
-  const Vec6 q = actual_q(d);
-  follow_actual(m, c, d, kAllJoints);
-  Vec6 tau;
-  ctrl_rnea(m, c, q, Vec6::Zero(), Vec6::Zero(), tau);
-
-  bool held = false;
-  for (int i = 0; i < 6; i++) {
-    held = held || fd.free[i] == 0.0;
-  }
-  if (held) {
-    Mat3 R;
-    Vec3 pos;
-    Mat6 J;
-    tcp_kinematics(m->arm, c->tcp_offset, q, R, pos, &J);
-    Vec6 qd;
-    for (int j = 0; j < URT_NJ; j++) {
-      qd[j] = d->x[j][URT_X_QD];
-    }
-    const Vec6 x = J * qd;
-    const Mat3 Rf = rotation_from_rotvec(Vec3(fd.feature[3], fd.feature[4], fd.feature[5]));
-    const Mat3 Rf_T = Rf.transpose();
-    const Mat3 R_hold = rotation_from_rotvec(Vec3(fd.r_hold[0], fd.r_hold[1], fd.r_hold[2]));
-    const Vec3 e_p = Rf_T * Vec3(Vec3(fd.p_hold[0], fd.p_hold[1], fd.p_hold[2]) - pos);
-    const Vec3 e_r = Rf_T * Vec3(R * rotvec_from_rotation(R.transpose() * R_hold));
-    const Vec3 v_f = Rf_T * Vec3(x.head<3>()), w_f = Rf_T * Vec3(x.tail<3>());
-    Vec3 f_f, m_f;
-    for (int i = 0; i < 3; i++) {
-      f_f[i] = fd.free[i] == 0.0 ? kHoldK * e_p[i] - kHoldD * v_f[i] : 0.0;
-      m_f[i] = fd.free[3 + i] == 0.0 ? kHoldKRot * e_r[i] - kHoldDRot * w_f[i] : 0.0;
-    }
-    Vec6 w;
-    w.head<3>() = Rf * f_f;
-    w.tail<3>() = Rf * m_f;
-    tau += J.transpose() * w;
-  }
-  for (int j = 0; j < URT_NJ; j++) {
-    c->tau_ff[j] = clamp_torque(m, j, tau[j]);
-  }
-  c->torque_mask = kAllJoints;
-}
-
-// ---- thermal ----
-
-void tick_thermal(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d) noexcept {
-  for (int j = 0; j < URT_NJ; j++) {
-    const urt_thermal_params_t& th = m->thermal[j];
-    if (th.c_th <= 0.0 || th.r_th <= 0.0) {
-      c->temperature[j] = th.t_amb;
-      continue;
-    }
-    double i = d->x[j][URT_X_I];
-    double p_loss = m->motor[j].r * i * i;
-    // exact for constant loss over the period (stable at any rate)
-    double t_ss = th.t_amb + p_loss * th.r_th;
-    double k = std::exp(-c->period / (th.r_th * th.c_th));
-    c->temperature[j] = t_ss + (c->temperature[j] - t_ss) * k;
-  }
-}
-
-}  // namespace
-
-// ---- kinematics shared with the snapshot ----
-
-void tcp_kinematics(const urt_arm_params_t& a, const double tcp[6], const Vec6& q, Mat3& R_BT,
-                    Vec3& p_BT, Mat6* J) noexcept {
-  Vec3 z[URT_NJ], o[URT_NJ];
-  Mat3 R;
-  Vec3 p;
-  joint_axes(a, q, z, o, R, p);
-  const Vec3 p_FT(tcp[0], tcp[1], tcp[2]);
-  R_BT = R * rotation_from_rotvec(Vec3(tcp[3], tcp[4], tcp[5]));
-  p_BT = p + R * p_FT;
-  if (J) {
-    point_jacobian(z, o, p_BT, *J);
-  }
-}
-
-Vec6 dls_solve(const Mat6& J, const Vec6& b, double lambda) noexcept {
-  if (lambda <= 0.0) {
-    return Eigen::PartialPivLU<Mat6>(J).solve(b);
-  }
-  Mat6 A = J * J.transpose();
-  A.diagonal().array() += lambda * lambda;
-  return J.transpose() * Eigen::PartialPivLU<Mat6>(A).solve(b);
-}
-
-namespace {
-
-// Newton on the calibrated model from a seed; true when converged within tol
-bool ik_newton(const urt_arm_params_t& a, const double tcp[6], const Mat3& R_goal,
-               const Vec3& p_goal, Vec6& q, int max_iter) noexcept {
-  constexpr double kTol = 1e-10;
-  double prev = HUGE_VAL;
-  for (int it = 0; it < max_iter; it++) {
-    Mat3 R;
-    Vec3 p;
-    Mat6 J;
-    tcp_kinematics(a, tcp, q, R, p, &J);
-    Vec6 e;
-    e.head<3>() = p_goal - p;
-    e.tail<3>() = R * rotvec_from_rotation(R.transpose() * R_goal);
-    double err = e.norm();
-    if (!std::isfinite(err)) {
-      return false;
-    }
-    // converged: stop when the error no longer shrinks (machine precision) below tol
-    if (err < 1e-14 || (err < kTol && err > 0.5 * prev)) {
-      return true;
-    }
-    prev = err;
-    // Levenberg–Marquardt-like damping that vanishes with the error: quadratic convergence
-    // near the solution, bounded steps near singular configurations
-    Vec6 dq = dls_solve(J, e, std::fmin(0.05, 0.1 * err));
-    double n = dq.cwiseAbs().maxCoeff();
-    if (n > 0.3) {
-      dq *= 0.3 / n;
-    }
-    q += dq;
-  }
-  // a last look
-  Mat3 R;
-  Vec3 p;
-  tcp_kinematics(a, tcp, q, R, p, nullptr);
-  return (p_goal - p).norm() < kTol && rotvec_from_rotation(R.transpose() * R_goal).norm() < kTol;
-}
-
-// bring each joint by whole turns as close to qnear as the limits allow
-void wrap_near(const urt_model_t* m, const double* qnear, Vec6& q) noexcept {
-  for (int j = 0; j < URT_NJ; j++) {
-    double k = std::round((qnear[j] - q[j]) / (2.0 * M_PI));
-    double c = q[j] + k * 2.0 * M_PI;
-    if (c >= m->joint[j].q_min && c <= m->joint[j].q_max) {
-      q[j] = c;
-    }
-  }
-}
-
-// Closed-form IK of the nominal UR chain (standard DH: Rot(z, q) Transl(z, d) Transl(x, a)
-// Rot(x, α), α = π/2, 0, 0, π/2, −π/2, 0, with the calibrated chain's a2, a3, d1, d4, d5, d6):
-// up to 8 seeds for the flange pose that puts the TCP at the goal. Returns how many.
-using Mat4 = Eigen::Matrix4d;
-
-Mat4 dh(double theta, double d, double a, double alpha) noexcept {
-  const double ct = std::cos(theta), st = std::sin(theta), ca = std::cos(alpha),
-               sa = std::sin(alpha);
-  Mat4 A;
-  A << ct, -st * ca, st * sa, a * ct, st, ct * ca, -ct * sa, a * st, 0.0, sa, ca, d, 0.0, 0.0, 0.0,
-      1.0;
-  return A;
-}
-
-Mat4 rigid_inverse(const Mat4& T) noexcept {
-  Mat4 I = Mat4::Identity();
-  I.block<3, 3>(0, 0) = T.block<3, 3>(0, 0).transpose();
-  I.block<3, 1>(0, 3) = -I.block<3, 3>(0, 0) * T.block<3, 1>(0, 3);
-  return I;
-}
-
-int nominal_ik_seeds(const urt_arm_params_t& arm, const double tcp[6], const Mat3& R_goal,
-                     const Vec3& p_goal, Vec6* out) noexcept {
-  const double d1 = arm.link[0].d, a2 = arm.link[1].a, a3 = arm.link[2].a, d4 = arm.link[3].d,
-               d5 = arm.link[4].d, d6 = arm.link[5].d;
-  const double h = M_PI / 2;
-  // flange pose: goal · tcp⁻¹
-  Mat3 R_FT = rotation_from_rotvec(Vec3(tcp[3], tcp[4], tcp[5]));
-  Mat3 R = R_goal * R_FT.transpose();
-  Vec3 p = p_goal - R * Vec3(tcp[0], tcp[1], tcp[2]);
-  Mat4 T06 = Mat4::Identity();
-  T06.block<3, 3>(0, 0) = R;
-  T06.block<3, 1>(0, 3) = p;
-
-  // base: the wrist centre (frame 5 origin) lies d4 off the plane of the arm
-  const Vec3 p5 = p - d6 * R.col(2);
-  const double r5 = std::hypot(p5.x(), p5.y());
-  if (r5 < std::fabs(d4)) {
-    return 0;
-  }
-  const double psi = std::atan2(p5.y(), p5.x()), phi = std::acos(d4 / r5);
-  int n = 0;
-  for (int s1 = -1; s1 <= 1; s1 += 2) {
-    const double q1 = psi + s1 * phi + h;
-    const double c1 = std::cos(q1), s1n = std::sin(q1);
-    // wrist 2 from the flange position across the arm plane
-    double c5 = (p.x() * s1n - p.y() * c1 - d4) / d6;
-    if (std::fabs(c5) > 1.0 + 1e-9) {
-      continue;
-    }
-    c5 = std::fmax(-1.0, std::fmin(1.0, c5));
-    for (int s5 = -1; s5 <= 1; s5 += 2) {
-      const double q5 = s5 * std::acos(c5), sin5 = std::sin(q5);
-      // wrist 3 from the base axes seen from the flange (arbitrary at sin q5 = 0)
-      double q6 = 0.0;
-      if (std::fabs(sin5) > 1e-9) {
-        q6 = std::atan2((-R(0, 1) * s1n + R(1, 1) * c1) / sin5, (R(0, 0) * s1n - R(1, 0) * c1) / sin5);
-      }
-      // the planar shoulder–elbow–wrist-1 chain
-      const Mat4 T01 = dh(q1, d1, 0.0, h), T45 = dh(q5, d5, 0.0, -h), T56 = dh(q6, d6, 0.0, 0.0);
-      const Mat4 T14 = rigid_inverse(T01) * T06 * rigid_inverse(T45 * T56);
-      const Vec3 p13 = (T14 * Eigen::Vector4d(0.0, -d4, 0.0, 1.0)).head<3>();
-      const double L = p13.norm();
-      double c3 = (L * L - a2 * a2 - a3 * a3) / (2.0 * a2 * a3);
-      if (std::fabs(c3) > 1.0 + 1e-9) {
-        continue;
-      }
-      c3 = std::fmax(-1.0, std::fmin(1.0, c3));
-      for (int s3 = -1; s3 <= 1; s3 += 2) {
-        const double q3 = s3 * std::acos(c3);
-        const double q2 = -std::atan2(p13.y(), -p13.x()) + std::asin(a3 * std::sin(q3) / L);
-        const Mat4 T13 = dh(q2, 0.0, a2, 0.0) * dh(q3, 0.0, a3, 0.0);
-        const Mat4 T34 = rigid_inverse(T13) * T14;
-        const double q4 = std::atan2(T34(1, 0), T34(0, 0));
-        Vec6 sol;
-        sol << q1, q2, q3, q4, q5, q6;
-        for (int j = 0; j < URT_NJ; j++) {
-          sol[j] -= arm.link[j].theta;  // the calibrated joint offsets, to first order
-          sol[j] = std::remainder(sol[j], 2.0 * M_PI);
-        }
-        out[n++] = sol;
-      }
-    }
-  }
-  return n;
-}
-
 }  // namespace
 }  // namespace urt::core
 
 using namespace urt::core;
 
 extern "C" {
-
-void urt_ctrl_forward_kinematics_tcp(const urt_model_t* m, const double tcp[6],
-                                     const double q[URT_NJ], double pose[6]) {
-  Mat3 R;
-  Vec3 p;
-  tcp_kinematics(m->arm, tcp, vec6(q), R, p, nullptr);
-  Vec3 r = rotvec_from_rotation(R);
-  for (int i = 0; i < 3; i++) {
-    pose[i] = p[i];
-    pose[3 + i] = r[i];
-  }
-}
-
-// Newton from qnear: when qnear is the previous set-point (movel, every tick) the solution is
-// within a few mrad and is taken at once. Otherwise every branch is tried: the closed-form UR
-// solution of the nominal DH chain (α = ±π/2 or 0, β = θ = 0, a1 = a4 = a5 = 0) gives up to 8
-// seeds, Newton moves each onto the calibrated chain, and the solution closest to qnear (after
-// whole turns toward qnear within the limits) wins.
-int urt_ctrl_inverse_kinematics_tcp(const urt_model_t* m, const double tcp[6],
-                                    const double pose[6], const double qnear[URT_NJ],
-                                    double q[URT_NJ]) {
-  if (!all_finite(pose, 6) || !all_finite(qnear, URT_NJ) || !all_finite(tcp, 6)) {
-    return URT_ERANGE;
-  }
-  const Mat3 R_goal = rotation_from_rotvec(Vec3(pose[3], pose[4], pose[5]));
-  const Vec3 p_goal(pose[0], pose[1], pose[2]);
-  const Vec6 qn = vec6(qnear);
-
-  double best = HUGE_VAL;
-  Vec6 best_q = Vec6::Zero();
-  auto consider = [&](Vec6 cand, int iters) noexcept {
-    if (!ik_newton(m->arm, tcp, R_goal, p_goal, cand, iters)) {
-      return;
-    }
-    wrap_near(m, qnear, cand);
-    if (target_faults(m, cand.data()) != 0) {
-      return;
-    }
-    double dist = (cand - qn).squaredNorm();
-    if (dist < best) {
-      best = dist;
-      best_q = cand;
-    }
-  };
-
-  consider(qn, 40);
-  if (best < 0.1 * 0.1) {  // closer than any other branch away from singular poses
-    put6(best_q, q);
-    return URT_OK;
-  }
-  Vec6 seeds[8];
-  int n = nominal_ik_seeds(m->arm, tcp, R_goal, p_goal, seeds);
-  for (int k = 0; k < n; k++) {
-    consider(seeds[k], 60);
-  }
-  if (best == HUGE_VAL) {
-    return URT_ERANGE;
-  }
-  put6(best_q, q);
-  return URT_OK;
-}
-
-int urt_ctrl_inverse_kinematics(const urt_model_t* m, const double pose[6],
-                                const double qnear[URT_NJ], double q[URT_NJ]) {
-  return urt_ctrl_inverse_kinematics_tcp(m, m->arm.tcp, pose, qnear, q);
-}
 
 int urt_ctrl_init(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, double period,
                   int powered) {

@@ -1,12 +1,145 @@
 // SPDX-License-Identifier: Apache-2.0
-// core/controller_internal.hpp — kinematics with a runtime TCP offset, shared by the controller
-// (core/controller.cpp) and the snapshot (core/snapshot.cpp). Internal. Context: RT.
+// core/controller_internal.hpp — what the controller's files (core/controller*.cpp) share, and
+// the kinematics with a runtime TCP offset that the snapshot (core/snapshot.cpp) uses too.
+// Internal. Context: RT.
 #ifndef URT_CORE_CONTROLLER_INTERNAL_HPP
 #define URT_CORE_CONTROLLER_INTERNAL_HPP
 
+#include <cmath>
+#include <cstdint>
+
 #include "arm.hpp"
+#include "urt/controller.h"
+#include "urt/core.h"
 
 namespace urt::core {
+
+// ---- constants both the state machine and the motion generators use ----
+
+constexpr double kForceAcc = 2.5;       // force-mode tool acceleration bound [m/s²]
+constexpr double kForceAccRot = 5.0;    // and angular [rad/s²]
+constexpr uint32_t kAllJoints = (1u << URT_NJ) - 1u;  // a torque_mask with every joint
+
+// ---- plans, stored in c->plan (copied in and out once per tick) ----
+
+// Trapezoidal speed profile over a distance D: accelerate at ap for ta, cruise at vp, brake.
+struct Trap {
+  double D, T, ta, vp, ap;
+};
+
+struct MovejPlan {
+  Trap tr;
+  double q_start[URT_NJ], dq[URT_NJ];
+};
+
+struct MovelPlan {
+  Trap tr;
+  double p_start[3], dp[3];      // line: p = p_start + dp · s/D
+  double r_start[3];             // start orientation (rotation vector)
+  double axis[3], theta;         // R(s) = R_start · Rot(axis, θ s/D), axis in the start frame
+};
+
+struct StopPlan {
+  double a[URT_NJ];              // per-joint deceleration, all joints reach 0 together
+};
+
+struct SpeedjPlan {
+  double qd_goal[URT_NJ], a[URT_NJ];
+};
+
+struct SpeedlPlan {
+  double xd_goal[6], xd[6];      // goal and current tool twist (v; ω), base frame
+};
+
+struct ServojPlan {
+  double target[URT_NJ];
+  double since;                  // time since the last servoj [s]
+};
+
+struct TorquePlan {
+  double tau[URT_NJ];            // commanded joint torques [N m]
+  double friction;               // 1: add the friction model at the actual speed
+  double since;                  // time since the last TORQUE [s]
+};
+
+struct FreedrivePlan {
+  double free[6];                // feature-frame axes x y z rx ry rz: 1 free, 0 held
+  double feature[6];             // the feature frame (pose in the base frame)
+  double p_hold[3], r_hold[3];   // TCP pose when freedrive began (base frame)
+};
+
+struct ServocPlan {
+  double target[6];              // pose goal
+  double xd[6];                  // current tool twist (v; ω), base frame
+};
+
+struct ForcePlan {
+  double xd[6];                  // current tool twist (v; ω), base frame
+  double xd_goal[6];             // twist of the speedl running inside force mode, base frame
+};
+
+union Plan {
+  MovejPlan movej;
+  MovelPlan movel;
+  StopPlan stop;
+  SpeedjPlan speedj;
+  SpeedlPlan speedl;
+  ServojPlan servoj;
+  TorquePlan torque;
+  FreedrivePlan freedrive;
+  ServocPlan servoc;
+  ForcePlan force;
+  double raw[64];
+};
+static_assert(sizeof(Plan) == sizeof(((urt_ctrl_t*)nullptr)->plan), "plan fits c->plan");
+
+// ---- command checks (controller.cpp) ----
+
+// URT_PSTOP_* bit a joint target deserves (0: fine): non-finite, or outside the joint limits.
+uint32_t target_faults(const urt_model_t* m, const double* q) noexcept;
+
+// ---- motion bookkeeping (controller.cpp) ----
+
+// Mark the motion id done (ids only grow: an older id changes nothing).
+void mark_done(urt_ctrl_t* c, uint64_t id) noexcept;
+
+// End the current motion (finished or aborted): its id, and a pending one's, are done; back to
+// position control, out of force mode, no external feed-forward.
+void finish_motion(urt_ctrl_t* c) noexcept;
+
+// ---- motion generators (controller_motion.cpp) ----
+// start_*: set c->motion and fill the plan p; tick_*: one period, from the set-point at the
+// period's start (c->q0, qd0, qdd0) to its end (c->q1, qd1, qdd1).
+
+void start_servoj(urt_ctrl_t* c, Plan& p, const double* q, urt_ctrl_motion_t motion) noexcept;
+void start_stop(urt_ctrl_t* c, Plan& p, double t_stop) noexcept;
+bool start_movej(const urt_model_t* m, urt_ctrl_t* c, Plan& p, const urt_ctrl_cmd_t* cmd) noexcept;
+bool start_movel(const urt_model_t* m, urt_ctrl_t* c, Plan& p, const urt_ctrl_cmd_t* cmd) noexcept;
+
+// movej's time is the path time c->traj_time, which the slider and the pause scale (scale, and
+// its rate dscale). tick_movel returns false when the line left the workspace (no IK).
+void tick_movej(urt_ctrl_t* c, Plan& p, double scale, double dscale) noexcept;
+bool tick_movel(const urt_model_t* m, urt_ctrl_t* c, Plan& p, double scale) noexcept;
+
+void tick_stop(urt_ctrl_t* c, const Plan& p) noexcept;
+void tick_speedj(urt_ctrl_t* c, const Plan& p) noexcept;
+void tick_speedl(const urt_model_t* m, urt_ctrl_t* c, Plan& p) noexcept;
+void tick_servoj(const urt_model_t* m, urt_ctrl_t* c, Plan& p) noexcept;
+
+// Returns true when the goal is reached (the set-point then sits on it at rest).
+bool tick_servoc(const urt_model_t* m, urt_ctrl_t* c, Plan& p) noexcept;
+
+// Returns false when a non-compliant axis deviates from the set-point by more than its limit.
+bool tick_force(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, Plan& p) noexcept;
+
+void tick_freedrive(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, Plan& p) noexcept;
+
+// Torque-controlled joints (mask): the set-point follows the arm, so that the command checks,
+// the snapshot's targets and the return to position control see where the arm really is.
+void follow_actual(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d,
+                   uint32_t mask) noexcept;
+
+// ---- kinematics (controller_kinematics.cpp) ----
 
 // The TCP (flange · offset, offset = x y z rx ry rz) at q: pose R_BT, p_BT in the base frame and,
 // if J is not null, the geometric Jacobian of the TCP point, rows (v; ω), base frame.
@@ -17,6 +150,53 @@ void tcp_kinematics(const urt_arm_params_t& a, const double tcp[6], const Vec6& 
 // Solve J x = b by damped least squares, x = Jᵀ (J Jᵀ + λ² 1)⁻¹ b; λ = 0 gives the exact
 // inverse (LU) for a well-conditioned J.
 Vec6 dls_solve(const Mat6& J, const Vec6& b, double lambda) noexcept;
+
+// ---- the controller's arm model and feed-forward (controller_feedforward.cpp) ----
+
+// Inverse dynamics of the controller's arm model: the model's, with the controller's gravity.
+void ctrl_rnea(const urt_model_t* m, const urt_ctrl_t* c, const Vec6& q, const Vec6& qd,
+               const Vec6& qdd, Vec6& tau) noexcept;
+
+// Steady-state LuGre friction of joint j at speed qd (σ0 z = g(q̇) sign q̇), faded in over a
+// small speed [N m].
+double friction_ff(const urt_model_t* m, int j, double qd) noexcept;
+
+// The model feed-forward at a set-point q, qd, qdd: τ = RNEA + friction − c->tau_bias [N m].
+void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const double* q, const double* qd,
+                  const double* qdd, double* tau) noexcept;
+
+// Joint j's torque within what the drives (and urt_command_set) accept [N m].
+double clamp_torque(const urt_model_t* m, int j, double tau) noexcept;
+
+// ---- thermal (controller_thermal.cpp) ----
+
+// Advance every motor's winding temperature c->temperature by one period c->period, under the
+// copper loss of the motor current in d (exact for a loss constant over the period).
+void tick_thermal(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d) noexcept;
+
+// ---- small helpers ----
+
+// six doubles as a vector and back
+inline Vec6 vec6(const double* x) noexcept { return Eigen::Map<const Vec6>(x); }
+inline void put6(const Vec6& v, double* x) noexcept { Eigen::Map<Vec6>{x} = v; }
+
+// the joint angles of the physics state
+inline Vec6 actual_q(const urt_data_t* d) noexcept {
+  Vec6 q;
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = d->x[j][URT_X_Q];
+  }
+  return q;
+}
+
+inline bool all_finite(const double* x, int n) noexcept {
+  for (int i = 0; i < n; i++) {
+    if (!std::isfinite(x[i])) {
+      return false;
+    }
+  }
+  return true;
+}
 
 }  // namespace urt::core
 

@@ -38,8 +38,6 @@ using urt::core::Mat6;
 using urt::core::Vec3;
 using urt::core::Vec6;
 
-Vec6 vec6(const double* x) { return Eigen::Map<const Vec6>(x); }
-
 void put_pose(const Mat3& R, const Vec3& p, double* pose) {
   Vec3 r = urt::core::rotvec_from_rotation(R);
   for (int i = 0; i < 3; i++) {
