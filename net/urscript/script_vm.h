@@ -126,4 +126,36 @@ int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *c
 /* Block for t seconds of controller time, checking the motion is not refused if asked. */
 int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, const char *what);
 
+//---- builtins (script_builtins*.c) ----
+
+/* A builtin gets its arguments in a[0..MAX_ARGS-1] in parameter order (V_NONE where absent)
+ * and leaves its result in *out (V_NONE: no value). Returns X_OK, or X_ERR with the error set. */
+typedef int (*us_builtin_fn)(vm *V, const us_node *n, sv *a, sv *out);
+
+typedef struct us_builtin {
+  const char *name;
+  us_builtin_fn fn;               /* NULL: known URScript that urtwin does not emulate */
+  int nreq;                       /* required leading parameters */
+  const char *params[MAX_ARGS];   /* parameter names, for named arguments */
+} us_builtin;
+
+/* Each family's table, defined next to its builtins; script_builtins.c joins them. */
+extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[];
+extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math;
+
+/* The builtin urt__us_builtin_find gave index k, NULL for any other k. */
+const us_builtin *urt__us_builtin_get(int k);
+
+/* Argument k of the builtin called at n: a number (bool counts; def when absent), an int, six
+ * numbers from a list or a pose (*is_pose tells which; nullable), or a bool. Non-finite numbers
+ * and wrong types are runtime errors naming the argument. */
+int urt__us_arg_num(vm *V, const us_node *n, const sv *a, int k, double def, double *out);
+int urt__us_arg_int(vm *V, const us_node *n, const sv *a, int k, int64_t *out);
+int urt__us_arg_vec6(vm *V, const us_node *n, const sv *a, int k, double x[6], bool *is_pose);
+int urt__us_arg_bool(vm *V, const us_node *n, const sv *a, int k, bool *out);
+
+/* Queue digital output `index` (bit of the 18: standard, configurable, tool) set to value;
+ * also what `digital_out[i] = b` does. */
+int urt__us_set_io(vm *V, const us_node *at, int index, bool value);
+
 #endif
