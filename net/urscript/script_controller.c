@@ -1,0 +1,131 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/urscript/script_controller.c — how a running URScript program meets the controller:
+ * controller time (snapshots, waiting for the next tick), the command queue, motions submitted
+ * and waited on, and the refusal messages the interpreter shares with rtde_control.c.
+ *
+ * Every wait goes through host->wait_tick and every reading through host->snapshot, so a
+ * lock-stepped (virtual) clock works; a secondary program may not wait at all.
+ */
+#include <stdio.h>
+
+#include "script_vm.h"
+
+#define SUBMIT_RETRY_TICKS 100
+
+urt_snapshot_t *urt__us_snap(vm *V) {
+  V->h->host->snapshot(V->h->host->ctx, &V->snap);
+  return &V->snap;
+}
+
+/* one wait for a newer tick; cancellation and secondary programs are checked here */
+int urt__us_wait_tick(vm *V, const us_node *at) {
+  if (V->prog->secondary) {
+    return urt__us_fail(V, at, "Blocking call in a secondary program");
+  }
+  uint64_t t = V->h->host->wait_tick(V->h->host->ctx, V->tick, V->h->wait_timeout_ms);
+  if (t > V->tick) {
+    V->tick = t;
+    V->steps = 0;
+  }
+  if (V->h->poll && V->h->poll(V->h->poll_ctx)) {
+    if (V->err->kind == US_ERR_NONE) {
+      V->err->kind = US_ERR_CANCEL;
+      snprintf(V->err->text, sizeof V->err->text, "stopped");
+    }
+    return X_ERR;
+  }
+  return X_OK;
+}
+
+int urt__us_submit(vm *V, const us_node *at, const urt_ctrl_cmd_t *cmd) {
+  for (int tries = 0; tries <= SUBMIT_RETRY_TICKS; tries++) {
+    if (V->h->host->submit(V->h->host->ctx, cmd)) {
+      return X_OK;
+    }
+    if (V->prog->secondary) {
+      break;  // a secondary program must not wait: report at once
+    }
+    if (urt__us_wait_tick(V, at) != X_OK) {
+      return X_ERR;
+    }
+  }
+  return urt__us_fail(V, at, "Controller command queue is full");
+}
+
+bool urt__us_safety_ok(const urt_snapshot_t *s) {
+  return s->safety_mode == URT_SAFETY_MODE_NORMAL || s->safety_mode == URT_SAFETY_MODE_REDUCED;
+}
+
+static const char *fault_text(uint32_t f, const char *unknown) {
+  if (f & URT_CTRL_FAULT_NOT_RUNNING) return "robot is not running";
+  if (f & URT_CTRL_FAULT_BAD_TARGET) return "invalid target";
+  if (f & URT_CTRL_FAULT_IK) return "no inverse kinematics solution";
+  if (f & URT_CTRL_FAULT_BAD_ARGUMENT) return "argument out of range";
+  if (f & URT_CTRL_FAULT_PSTOP) return "protective stop";
+  return unknown;
+}
+
+bool urt__us_motion_refused(const urt_snapshot_t *s, const char *what, const char *unknown,
+                            char *text, size_t n) {
+  if (s->robot_mode != URT_ROBOT_MODE_RUNNING && !s->ctrl_fault) {
+    snprintf(text, n, "%s: motion refused (robot is not running; robot mode %d)", what,
+             (int)s->robot_mode);
+    return true;
+  }
+  if (s->ctrl_fault || !urt__us_safety_ok(s)) {
+    snprintf(text, n, "%s: motion refused or aborted (%s; safety mode %d)", what,
+             fault_text(s->ctrl_fault, unknown), (int)s->safety_mode);
+    return true;
+  }
+  return false;
+}
+
+static int motion_check(vm *V, const us_node *at, const char *what) {
+  char text[sizeof V->err->text];
+  if (urt__us_motion_refused(&V->snap, what, "unknown", text, sizeof text)) {
+    return urt__us_fail(V, at, "%s", text);
+  }
+  return X_OK;
+}
+
+/* submit a motion and, if wait, block until the controller reports it done */
+int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *cmd, bool wait) {
+  if (V->prog->secondary) {
+    return urt__us_fail(V, at, "%s is not allowed in a secondary program", what);
+  }
+  cmd->id = ++*V->h->motion_id;
+  if (urt__us_submit(V, at, cmd) != X_OK) {
+    return X_ERR;
+  }
+  if (!wait) {
+    return X_OK;
+  }
+  for (;;) {
+    urt__us_snap(V);
+    if (V->snap.motion_done_id >= cmd->id) {
+      break;
+    }
+    if (!urt__us_safety_ok(&V->snap) || V->snap.robot_mode != URT_ROBOT_MODE_RUNNING) {
+      break;  // refused or aborted: reported below
+    }
+    if (urt__us_wait_tick(V, at) != X_OK) {
+      return X_ERR;
+    }
+  }
+  return motion_check(V, at, what);
+}
+
+/* block for t seconds of controller time */
+int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, const char *what) {
+  double start = urt__us_snap(V)->time;
+  while (V->snap.time < start + t - 1e-9) {
+    if (urt__us_wait_tick(V, at) != X_OK) {
+      return X_ERR;
+    }
+    urt__us_snap(V);
+    if (check_motion && motion_check(V, at, what) != X_OK) {
+      return X_ERR;
+    }
+  }
+  return X_OK;
+}

@@ -1,0 +1,161 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/urscript/script_vm.h — private to the interpreter: the values a running program computes
+ * with, the interpreter's state, and the calls that cross between the evaluator
+ * (script_interp.c), the controller link (script_controller.c) and the builtins. script.h is
+ * the interpreter seen from the parser and the runner; this header is the view from inside.
+ */
+#ifndef URT_NET_URSCRIPT_SCRIPT_VM_H
+#define URT_NET_URSCRIPT_SCRIPT_VM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "script.h"
+
+#define MAX_CALL_DEPTH URT_SCRIPT_MAX_DEPTH
+#define MAX_ARGS 8
+
+//---- values ----
+
+enum { V_NONE = 0, V_BOOL, V_INT, V_FLOAT, V_STR, V_LIST, V_POSE };
+
+typedef struct sv {
+  uint8_t t;
+  int32_t n;  /* V_STR: bytes; V_LIST: elements */
+  union {
+    int64_t i;  /* V_INT, V_BOOL */
+    double f;
+    const char *s;
+    struct sv *l;
+    double p[6];
+  } u;
+} sv;
+
+static inline const char *type_name(int t) {
+  static const char *const names[] = {"none", "bool", "int", "float", "string", "list", "pose"};
+  return t >= 0 && t <= V_POSE ? names[t] : "?";
+}
+
+static inline bool is_num(const sv *v) { return v->t == V_INT || v->t == V_FLOAT; }
+static inline double num(const sv *v) { return v->t == V_INT ? (double)v->u.i : v->u.f; }
+
+static inline sv mk_int(int64_t i) { sv v = {.t = V_INT}; v.u.i = i; return v; }
+static inline sv mk_float(double f) { sv v = {.t = V_FLOAT}; v.u.f = f; return v; }
+static inline sv mk_bool(bool b) { sv v = {.t = V_BOOL}; v.u.i = b; return v; }
+
+static inline sv mk_pose(const double p[6]) {
+  sv v = {.t = V_POSE};
+  memcpy(v.u.p, p, sizeof v.u.p);
+  return v;
+}
+
+static inline bool truthy(const sv *v) {
+  switch (v->t) {
+    case V_BOOL:
+    case V_INT: return v->u.i != 0;
+    case V_FLOAT: return v->u.f != 0;
+    default: return true;
+  }
+}
+
+static inline bool is_name(const us_name *nm, const char *s) {
+  return nm && (int)strlen(s) == nm->len && memcmp(s, nm->s, (size_t)nm->len) == 0;
+}
+
+/* "%.6g" numbers, True/False, p[…] and […] without spaces (as a controller's log shows);
+ * returns what snprintf would. */
+int urt__us_fmt_value(const sv *v, char *buf, size_t cap);
+
+//---- interpreter state ----
+
+typedef struct var {
+  const us_name *name;
+  sv v;              /* heap-owned */
+  bool is_global;    /* `global x` inside a function: x lives in the program frame */
+} var;
+
+typedef struct frame {
+  var *vars;
+  int n, cap;
+} frame;
+
+typedef struct vm {
+  const us_prog *prog;
+  const us_hooks *h;
+  us_err *err;
+  /* scratch stack for temporaries */
+  char *scratch;
+  size_t used;
+  /* frames: 0 = program body (globals) */
+  frame frames[MAX_CALL_DEPTH + 1];
+  int depth;        /* current frame index */
+  int eval_depth;
+  sv retval;        /* heap-owned value of the last `return` */
+  bool halted;      /* `halt` inside a function: unwinds as X_ERR with no error */
+  size_t var_bytes; /* heap held by variables (bounded by MAX_VAR_BYTES) */
+  /* time */
+  uint64_t tick;
+  int64_t steps;
+  urt_snapshot_t snap;
+} vm;
+
+enum { X_OK = 0, X_ERR, X_RETURN, X_BREAK, X_CONTINUE, X_HALT };
+
+/* Record a runtime error at `at` (the first one wins) and return X_ERR. Nullable: at. */
+int urt__us_fail(vm *V, const us_node *at, const char *fmt, ...);
+
+/* n bytes of scratch, 16-aligned, freed after the statement; NULL (error set) when full. */
+void *urt__us_salloc(vm *V, const us_node *at, size_t n);
+
+//---- the controller (script_controller.c) ----
+
+/* Read the host's snapshot into V->snap and return it. */
+urt_snapshot_t *urt__us_snap(vm *V);
+
+/* One wait for a newer tick; cancellation and secondary programs are checked here. */
+int urt__us_wait_tick(vm *V, const us_node *at);
+
+/* Queue a command, retrying for SUBMIT_RETRY_TICKS ticks while the queue is full. */
+int urt__us_submit(vm *V, const us_node *at, const urt_ctrl_cmd_t *cmd);
+
+/* Submit a motion and, if wait, block until the controller reports it done. */
+int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *cmd, bool wait);
+
+/* Block for t seconds of controller time, checking the motion is not refused if asked. */
+int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, const char *what);
+
+//---- builtins (script_builtins*.c) ----
+
+/* A builtin gets its arguments in a[0..MAX_ARGS-1] in parameter order (V_NONE where absent)
+ * and leaves its result in *out (V_NONE: no value). Returns X_OK, or X_ERR with the error set. */
+typedef int (*us_builtin_fn)(vm *V, const us_node *n, sv *a, sv *out);
+
+typedef struct us_builtin {
+  const char *name;
+  us_builtin_fn fn;               /* NULL: known URScript that urtwin does not emulate */
+  int nreq;                       /* required leading parameters */
+  const char *params[MAX_ARGS];   /* parameter names, for named arguments */
+} us_builtin;
+
+/* Each family's table, defined next to its builtins; script_builtins.c joins them. */
+extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[];
+extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math;
+
+/* The builtin urt__us_builtin_find gave index k, NULL for any other k. */
+const us_builtin *urt__us_builtin_get(int k);
+
+/* Argument k of the builtin called at n: a number (bool counts; def when absent), an int, six
+ * numbers from a list or a pose (*is_pose tells which; nullable), or a bool. Non-finite numbers
+ * and wrong types are runtime errors naming the argument. */
+int urt__us_arg_num(vm *V, const us_node *n, const sv *a, int k, double def, double *out);
+int urt__us_arg_int(vm *V, const us_node *n, const sv *a, int k, int64_t *out);
+int urt__us_arg_vec6(vm *V, const us_node *n, const sv *a, int k, double x[6], bool *is_pose);
+int urt__us_arg_bool(vm *V, const us_node *n, const sv *a, int k, bool *out);
+
+/* Queue digital output `index` (bit of the 18: standard, configurable, tool) set to value;
+ * also what `digital_out[i] = b` does. */
+int urt__us_set_io(vm *V, const us_node *at, int index, bool value);
+
+#endif
