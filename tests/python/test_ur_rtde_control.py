@@ -31,6 +31,11 @@ class Stream:
         self.rt = RtReader(host)
         self.thread = threading.Thread(target=self._run, daemon=True)
         self.thread.start()
+        # a client call that holds the GIL (ur_rtde's constructor does) would otherwise leave
+        # this thread without its first packet when the test asks for the latest one
+        t_end = time.monotonic() + 2.0
+        while not self.packets and time.monotonic() < t_end:
+            time.sleep(0.001)
 
     def _run(self):
         while not self.stop.is_set():

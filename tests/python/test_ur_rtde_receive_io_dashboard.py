@@ -29,6 +29,9 @@ class RtRecorder:
         self.rt = RtReader(host)
         self.thread = threading.Thread(target=self._run, daemon=True)
         self.thread.start()
+        t_end = time.monotonic() + 2.0  # the first packet is in before a test reads the record
+        while not self.by_tick and time.monotonic() < t_end:
+            time.sleep(0.001)
 
     def _run(self):
         while not self.stop.is_set():

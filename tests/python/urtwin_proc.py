@@ -101,6 +101,10 @@ class Emulator:
                 self.proc.kill()
                 self.out, self.err = self.proc.communicate()
         self.returncode = self.proc.returncode if self.proc else None
+        if exc and exc[0] is not None and self.err:
+            # a failing test shows what the emulator said (captured, printed in the report)
+            print(f"urtwin on {self.host} exited {self.returncode}; its stderr:\n"
+                  f"{self.err.decode(errors='replace')[-3000:]}")
 
     @property
     def period(self):
