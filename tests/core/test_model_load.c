@@ -219,7 +219,8 @@ static void test_model_load__loads_ur5_in_si_units(void **state) {
   assert_near(m->friction[5].sigma0, 5e6, 0.0);
   assert_near(m->friction[0].f_c, 8.0, 0.0);
   assert_near(m->friction[5].f_c, 2.0, 0.0);
-  assert_near(m->friction[3].k_q, 10.0, 0.0);
+  assert_near(m->friction[0].k_q, 10.0, 0.0);
+  assert_near(m->friction[3].k_q, 5.0, 0.0);
 
   urt_model_free(m);
 }

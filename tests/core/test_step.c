@@ -268,12 +268,13 @@ static void test_step__noisy_excitations_at_10_and_20_khz_never_stop(void **stat
   run_excitation("simulation.dt=5e-5", 3);
 }
 
-// With sub-stepping switched off, wrist 3's Stribeck dip is unstable at 50 µs: urt_step must
-// first redo implausible steps as fine steps, and when that cannot save the state, stop with a
-// finite state instead of diverging.
+// With sub-stepping switched off and model.md's steeper wrist Stribeck dip (k_q = 10), wrist 3
+// is unstable at 50 µs: urt_step must first redo implausible steps as fine steps, and when that
+// cannot save the state, stop with a finite state instead of diverging.
 static void test_step__unstable_settings_end_in_a_protective_stop_not_in_nan(void **state) {
   (void)state;
-  const char *const ov[] = {"simulation.substep_ratio=100", NULL};
+  const char *const ov[] = {"simulation.substep_ratio=100", "joints.3.friction.k_q=10",
+                            "joints.4.friction.k_q=10", "joints.5.friction.k_q=10", NULL};
   urt_model_t *m = urt_test_model(ov);
   urt_data_t *d = new_data(m);
   urt_traj_t tr;

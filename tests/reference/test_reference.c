@@ -110,26 +110,22 @@ static void compare(const char *const *extra, double duration, const bounds_t *l
   urt_model_free(m);
 }
 
-// The bounds: 1e-5 rad and 2 % on every joint. With model.md's friction (k_q = 10) the
-// Stribeck dip of wrists 1–2 exceeds their gear damping and they self-excite a ~300 Hz
-// stick-slip cycle in slow motion; that cycle is sensitive to every local error: two CVODE runs
-// at rtol 1e-10 and 1e-11 differ on wrist 2 by 2.6e-5 rad and 21 % RMS current, so wrist 2 is
-// held to the reference's own spread, and wrist 1 (3.6e-5 rad, 3.9 % measured) to 5e-5 / 5 %.
+// The bounds, 1e-5 rad and 2 % RMS current, on every joint, at 20 kHz. (With model.md's
+// k_q = 10 on the wrists, wrists 1–2 self-excite a chaotic ~300 Hz stick-slip cycle that CVODE
+// cannot reproduce against itself; config/README.md says why the wrists use k_q = 5.)
 static void test_reference__20khz_matches_cvode_on_1_s_of_excitation(void **state) {
   (void)state;
   const char *const ov[] = {"simulation.dt=5e-5", NULL};
   const bounds_t lim = {
-      {1e-5, 1e-5, 1e-5, 5e-5, 5e-5, 1e-5}, {0.02, 0.02, 0.02, 0.05, 0.25, 0.02}, 0.02};
+      {1e-5, 1e-5, 1e-5, 1e-5, 1e-5, 1e-5}, {0.02, 0.02, 0.02, 0.02, 0.02, 0.02}, 0.02};
   compare(ov, 1.0, &lim);
 }
 
-// The same run with a Stribeck dip shallow enough (k_q = 1) that no wrist limit-cycles: every
-// joint then meets the bounds, which isolates the integrator's own error.
-static void test_reference__20khz_meets_1e_5_rad_and_2_percent_without_stick_slip_cycles(
-    void **state) {
+// At 10 kHz the scheme stays stable and, on this trajectory, inside the same bounds (10 s:
+// 8.6e-6 rad and 0.59 % at most, `make reference-compare`).
+static void test_reference__10khz_stays_stable_and_within_the_bounds(void **state) {
   (void)state;
-  const char *const ov[] = {"simulation.dt=5e-5", "joints.3.friction.k_q=1",
-                            "joints.4.friction.k_q=1", "joints.5.friction.k_q=1", NULL};
+  const char *const ov[] = {"simulation.dt=1e-4", NULL};
   const bounds_t lim = {
       {1e-5, 1e-5, 1e-5, 1e-5, 1e-5, 1e-5}, {0.02, 0.02, 0.02, 0.02, 0.02, 0.02}, 0.02};
   compare(ov, 1.0, &lim);
@@ -138,7 +134,7 @@ static void test_reference__20khz_meets_1e_5_rad_and_2_percent_without_stick_sli
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_reference__20khz_matches_cvode_on_1_s_of_excitation),
-      cmocka_unit_test(test_reference__20khz_meets_1e_5_rad_and_2_percent_without_stick_slip_cycles),
+      cmocka_unit_test(test_reference__10khz_stays_stable_and_within_the_bounds),
   };
   return cmocka_run_group_tests_name("reference/reference", tests, NULL, NULL);
 }
