@@ -17,19 +17,35 @@ pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN
 
 def stream(host, seconds, port=30003):
     """The 30003 packets that arrive within `seconds` of wall time after the first one (the
-    clock starts when the first packet is in, so connection set-up does not count)."""
+    clock starts when the first packet is in, so connection set-up does not count); each
+    carries its arrival time on this machine's monotonic clock ("arrived")."""
     out = []
     with RtReader(host, port) as rt:
         rt.read()
         t_end = time.monotonic() + seconds
         while True:
             raw = rt.read()
-            if time.monotonic() >= t_end:
+            now = time.monotonic()
+            if now >= t_end:
                 break
             p = decode_rt(raw)
             p["bytes"] = len(raw)
+            p["arrived"] = now
             out.append(p)
     return out
+
+
+def clock_drift(packets, window=1.0):
+    """How far the controller clock fell behind the wall clock over the stream [s]. A packet's
+    arrival is its tick's wall time plus a delay of the I/O thread, the network and this reader;
+    the least such delay within the first and the last `window` s is the emulator's own (a
+    preempted reader only adds delay), so their difference is the drift, free of reader lag."""
+    t0 = packets[0]["time"]
+    def least_delay(ps):
+        return min(p["arrived"] - (p["time"] - t0) for p in ps)
+    first = [p for p in packets if p["time"] - t0 < window]
+    last = [p for p in packets if packets[-1]["time"] - p["time"] < window]
+    return least_delay(last) - least_delay(first)
 
 
 def check_stream(packets, period, size):
@@ -50,13 +66,21 @@ def test_rt_stream_rate_size_and_timestamps(version, period, size, expected, tol
         print(f"\n{version}: ports open {emu.ready_after * 1000:.0f} ms after start")
         assert emu.ready_after < 1.0
         packets = stream(emu.host, 10.0)
+    # the rate is judged on the emulator's side: every tick sent (no irregular step) and the
+    # controller clock keeping the wall clock's pace (drift within one period); the count in the
+    # 10 s is what this reader got in time: never above the rate, and short of it only by the
+    # reader's own lag at the end (bounded loosely, 1 %: a loaded machine preempts the reader)
     n = len(packets)
     span = packets[-1]["time"] - packets[0]["time"]
     bad = check_stream(packets, period, size)
+    drift = clock_drift(packets)
+    late = 10.0 - span - period
     print(f"{version}: {n} packets of {size} bytes in 10 s of wall time, controller time span "
-          f"{span:.3f} s, {len(bad)} irregular steps")
+          f"{span:.3f} s, {len(bad)} irregular steps; controller clock drift from wall "
+          f"{drift * 1e3:+.2f} ms over the stream; reader behind by {late * 1e3:.1f} ms at the end")
     assert bad == []
-    assert abs(n - expected) <= tol
+    assert abs(drift) <= period
+    assert expected * 0.99 <= n <= expected + tol
 
 
 def test_ports_survive_garbage_and_clients_that_never_read():
