@@ -12,7 +12,6 @@
 #include <linux/futex.h>
 #include <math.h>
 #include <pthread.h>
-#include <sched.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -315,14 +314,7 @@ static void rt_setup(const urt_loop_config_t *cfg) {
       stack[i] = 0;
     }
   }
-  if (cfg->rt_priority > 0) {
-    struct sched_param sp = {.sched_priority = cfg->rt_priority};
-    int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
-    if (rc != 0) {
-      fprintf(stderr, "urtwin: warning: SCHED_FIFO priority %d refused (%s); running as SCHED_OTHER\n",
-              cfg->rt_priority, strerror(rc));
-    }
-  }
+  urt_thread_set_fifo(pthread_self(), cfg->rt_priority, "physics thread");
 }
 
 static void drain_commands(urt_loop_t *l) {

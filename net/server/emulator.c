@@ -10,7 +10,6 @@
 
 #include <errno.h>
 #include <pthread.h>
-#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -316,15 +315,8 @@ static void drain_messages(urt_emulator_t *e) {
 
 static void *io_main(void *arg) {
   urt_emulator_t *e = arg;
-  if (e->cfg.rt_priority > 0) {
-    // just below the physics thread: the streams' jitter is the I/O thread's wake-up latency
-    struct sched_param sp = {.sched_priority = e->cfg.rt_priority};
-    int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp);
-    if (rc != 0) {
-      fprintf(stderr, "urtwin: warning: SCHED_FIFO priority %d for the I/O thread refused (%s)\n",
-              e->cfg.rt_priority, strerror(rc));
-    }
-  }
+  // just below the physics thread: the streams' jitter is the I/O thread's wake-up latency
+  urt_thread_set_fifo(pthread_self(), e->cfg.rt_priority, "I/O thread");
   struct epoll_event ev[MAX_EVENTS];
   while (!atomic_load(&e->stop)) {
     int n = epoll_wait(e->epoll_fd, ev, MAX_EVENTS, 50);

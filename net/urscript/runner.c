@@ -11,7 +11,6 @@
 #define _GNU_SOURCE
 #endif
 #include <pthread.h>
-#include <sched.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,6 +20,7 @@
 #include "rtde_control.h"
 #include "script.h"
 #include "urt/errors.h"
+#include "urt/thread.h"
 
 #define QUEUE_CAP 64
 #define HALT_DECELERATION 4.0  /* [rad/s²] joint deceleration of the stop that ends a program */
@@ -285,18 +285,9 @@ int urt_runner_create(const urt_script_host_t *host, const urt_runner_config_t *
 
   // the interpreter recurses (bounded by URT_SCRIPT_MAX_DEPTH and the eval depth); 8 MiB is what
   // the fuzzer ran millions of inputs in under ASan (a main thread's default stack)
-  pthread_attr_t attr;
-  pthread_attr_init(&attr);
-  pthread_attr_setstacksize(&attr, 8u << 20);
-  int rc = pthread_create(&r->thread, &attr, thread_main, r);
-  pthread_attr_destroy(&attr);
-  if (rc == 0 && r->cfg.rt_priority > 0) {
-    struct sched_param sp = {.sched_priority = r->cfg.rt_priority};
-    int prc = pthread_setschedparam(r->thread, SCHED_FIFO, &sp);
-    if (prc != 0) {
-      fprintf(stderr, "urtwin: warning: SCHED_FIFO priority %d for the script thread refused (%s)\n",
-              r->cfg.rt_priority, strerror(prc));
-    }
+  int rc = urt_thread_start(&r->thread, thread_main, r, 8u << 20);
+  if (rc == 0) {
+    urt_thread_set_fifo(r->thread, r->cfg.rt_priority, "script thread");
   }
   if (rc != 0) {
     pthread_cond_destroy(&r->idle_cv);
