@@ -3,7 +3,8 @@
  * serves all clients and is the single producer of client commands into the hard loop. The
  * loop writes an eventfd after each tick (urt_loop_set_notify_fd), so new ticks arrive in the
  * same epoll loop as socket events. What each port does lives in port_script.c, port_rtde.c and
- * port_dashboard.c; this file owns the connections, the tick fan-out and the runner's host.
+ * port_dashboard.c, the runner's view of the emulator in script_host.c; this file owns the
+ * connections and the tick fan-out.
  */
 #define _GNU_SOURCE
 #include "urt/net/emulator.h"
@@ -80,79 +81,6 @@ void urt__submit(urt_emulator_t *e, const urt_ctrl_cmd_t *cmd) {
 void urt__submit_kind(urt_emulator_t *e, int kind) {
   urt_ctrl_cmd_t cmd = {.kind = kind};
   urt__submit(e, &cmd);
-}
-
-//---- the runner's host: the loop and the register bank, seen from the runner thread ----
-
-static bool host_submit(void *ctx, const urt_ctrl_cmd_t *cmd) {
-  urt_emulator_t *e = ctx;
-  return urt_loop_submit(e->loop, e->runner_producer, cmd);
-}
-
-static uint64_t host_wait_tick(void *ctx, uint64_t after, int timeout_ms) {
-  urt_emulator_t *e = ctx;
-  return urt_loop_wait(e->loop, after, timeout_ms);
-}
-
-static void host_snapshot(void *ctx, urt_snapshot_t *out) {
-  urt_emulator_t *e = ctx;
-  urt_loop_read_latest(e->loop, out);
-}
-
-static void host_message(void *ctx, const urt_script_msg_t *msg) {
-  urt_emulator_t *e = ctx;
-  pthread_mutex_lock(&e->msg_lock);
-  if (e->msg_len < MSG_QUEUE) {
-    e->msg_queue[(e->msg_head + e->msg_len) % MSG_QUEUE] = *msg;
-    e->msg_len++;
-  } else {
-    e->msg_dropped++;
-  }
-  pthread_mutex_unlock(&e->msg_lock);
-  uint64_t one = 1;
-  ssize_t rc = write(e->msg_fd, &one, sizeof one);
-  (void)rc;  // a full eventfd counter still wakes the reader
-}
-
-static int host_inverse_kinematics(void *ctx, const double pose[6], const double qnear[URT_NJ],
-                                   double q[URT_NJ]) {
-  urt_emulator_t *e = ctx;
-  urt_snapshot_t s;
-  urt_loop_read_latest(e->loop, &s);
-  return urt_ctrl_inverse_kinematics_tcp(e->m, s.tcp_offset, pose, qnear, q);
-}
-
-static int host_forward_kinematics(void *ctx, const double q[URT_NJ], double pose[6]) {
-  urt_emulator_t *e = ctx;
-  urt_snapshot_t s;
-  urt_loop_read_latest(e->loop, &s);
-  urt_ctrl_forward_kinematics_tcp(e->m, s.tcp_offset, q, pose);
-  return 0;
-}
-
-static void host_read_registers(void *ctx, urt_rtde_registers_t *out) {
-  urt_emulator_t *e = ctx;
-  pthread_mutex_lock(&e->reg_lock);
-  *out = e->regs;
-  pthread_mutex_unlock(&e->reg_lock);
-}
-
-static void host_write_output_register(void *ctx, int kind, int index, double value) {
-  urt_emulator_t *e = ctx;
-  pthread_mutex_lock(&e->reg_lock);
-  if (kind == URT_SCRIPT_REG_INT && index >= 0 && index < URT_RTDE_NREG) {
-    e->regs.out_int[index] = (int32_t)value;
-  } else if (kind == URT_SCRIPT_REG_DOUBLE && index >= 0 && index < URT_RTDE_NREG) {
-    e->regs.out_double[index] = value;
-  } else if (kind == URT_SCRIPT_REG_BIT && index >= 0 && index < URT_RTDE_NBITREG) {
-    e->regs.out_bit[index] = value != 0.0;
-  }
-  pthread_mutex_unlock(&e->reg_lock);
-}
-
-static const urt_model_t *host_model(void *ctx) {
-  const urt_emulator_t *e = ctx;
-  return e->m;
 }
 
 //---- ticks ----
@@ -418,18 +346,7 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
     ev.data.ptr = (void *)(uintptr_t)(TAG_LISTEN0 + k);
     epoll_ctl(e->epoll_fd, EPOLL_CTL_ADD, e->listen_fd[k], &ev);
   }
-  urt_script_host_t host = {
-      .ctx = e,
-      .submit = host_submit,
-      .wait_tick = host_wait_tick,
-      .snapshot = host_snapshot,
-      .message = host_message,
-      .inverse_kinematics = host_inverse_kinematics,
-      .forward_kinematics = host_forward_kinematics,
-      .read_registers = host_read_registers,
-      .write_output_register = host_write_output_register,
-      .model = host_model,
-  };
+  urt_script_host_t host = urt__script_host(e);
   // the script thread shares the I/O thread's priority: both feed the physics thread's rings
   urt_runner_config_t rcfg = {.rt_priority = e->cfg.rt_priority};
   if (urt_runner_create(&host, &rcfg, &e->runner) != 0) {

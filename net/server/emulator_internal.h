@@ -107,6 +107,10 @@ void urt__dashboard_tick(urt_emulator_t *e, const urt_snapshot_t *s);
 void urt__script_broadcast(urt_emulator_t *e, const urt_script_msg_t *msg);
 void urt__script_broadcast_text(urt_emulator_t *e, const char *text);
 
+/* The runner's host over this emulator (script_host.c): it uses the runner's producer ring,
+ * reg_lock and the message queue. */
+urt_script_host_t urt__script_host(urt_emulator_t *e);
+
 /* A command from the I/O thread into the controller; a full ring is reported as text. */
 void urt__submit(urt_emulator_t *e, const urt_ctrl_cmd_t *cmd);
 void urt__submit_kind(urt_emulator_t *e, int kind);

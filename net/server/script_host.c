@@ -1,0 +1,96 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/server/script_host.c — the URScript runner's host (urt_script_host_t): the hard loop,
+ * the RTDE register bank and the message queue to 30001/30002, seen from the runner thread.
+ */
+#define _GNU_SOURCE
+#include <pthread.h>
+#include <unistd.h>
+
+#include "emulator_internal.h"
+#include "urt/core.h"
+
+static bool host_submit(void *ctx, const urt_ctrl_cmd_t *cmd) {
+  urt_emulator_t *e = ctx;
+  return urt_loop_submit(e->loop, e->runner_producer, cmd);
+}
+
+static uint64_t host_wait_tick(void *ctx, uint64_t after, int timeout_ms) {
+  urt_emulator_t *e = ctx;
+  return urt_loop_wait(e->loop, after, timeout_ms);
+}
+
+static void host_snapshot(void *ctx, urt_snapshot_t *out) {
+  urt_emulator_t *e = ctx;
+  urt_loop_read_latest(e->loop, out);
+}
+
+static void host_message(void *ctx, const urt_script_msg_t *msg) {
+  urt_emulator_t *e = ctx;
+  pthread_mutex_lock(&e->msg_lock);
+  if (e->msg_len < MSG_QUEUE) {
+    e->msg_queue[(e->msg_head + e->msg_len) % MSG_QUEUE] = *msg;
+    e->msg_len++;
+  } else {
+    e->msg_dropped++;
+  }
+  pthread_mutex_unlock(&e->msg_lock);
+  uint64_t one = 1;
+  ssize_t rc = write(e->msg_fd, &one, sizeof one);
+  (void)rc;  // a full eventfd counter still wakes the reader
+}
+
+static int host_inverse_kinematics(void *ctx, const double pose[6], const double qnear[URT_NJ],
+                                   double q[URT_NJ]) {
+  urt_emulator_t *e = ctx;
+  urt_snapshot_t s;
+  urt_loop_read_latest(e->loop, &s);
+  return urt_ctrl_inverse_kinematics_tcp(e->m, s.tcp_offset, pose, qnear, q);
+}
+
+static int host_forward_kinematics(void *ctx, const double q[URT_NJ], double pose[6]) {
+  urt_emulator_t *e = ctx;
+  urt_snapshot_t s;
+  urt_loop_read_latest(e->loop, &s);
+  urt_ctrl_forward_kinematics_tcp(e->m, s.tcp_offset, q, pose);
+  return 0;
+}
+
+static void host_read_registers(void *ctx, urt_rtde_registers_t *out) {
+  urt_emulator_t *e = ctx;
+  pthread_mutex_lock(&e->reg_lock);
+  *out = e->regs;
+  pthread_mutex_unlock(&e->reg_lock);
+}
+
+static void host_write_output_register(void *ctx, int kind, int index, double value) {
+  urt_emulator_t *e = ctx;
+  pthread_mutex_lock(&e->reg_lock);
+  if (kind == URT_SCRIPT_REG_INT && index >= 0 && index < URT_RTDE_NREG) {
+    e->regs.out_int[index] = (int32_t)value;
+  } else if (kind == URT_SCRIPT_REG_DOUBLE && index >= 0 && index < URT_RTDE_NREG) {
+    e->regs.out_double[index] = value;
+  } else if (kind == URT_SCRIPT_REG_BIT && index >= 0 && index < URT_RTDE_NBITREG) {
+    e->regs.out_bit[index] = value != 0.0;
+  }
+  pthread_mutex_unlock(&e->reg_lock);
+}
+
+static const urt_model_t *host_model(void *ctx) {
+  const urt_emulator_t *e = ctx;
+  return e->m;
+}
+
+urt_script_host_t urt__script_host(urt_emulator_t *e) {
+  return (urt_script_host_t){
+      .ctx = e,
+      .submit = host_submit,
+      .wait_tick = host_wait_tick,
+      .snapshot = host_snapshot,
+      .message = host_message,
+      .inverse_kinematics = host_inverse_kinematics,
+      .forward_kinematics = host_forward_kinematics,
+      .read_registers = host_read_registers,
+      .write_output_register = host_write_output_register,
+      .model = host_model,
+  };
+}
