@@ -2,7 +2,8 @@
 # urtwin — thin wrapper over CMake. Every target installs what is missing first (deps).
 #   make run    build and start the emulator (urtwin) with config/ur5.yaml on 127.0.0.1
 #   make test   every test: CMocka under ctest (twice: release, then clang ASan/UBSan), the
-#               libFuzzer targets for FUZZ_SECONDS each under ASan/UBSan, then pytest
+#               libFuzzer targets for FUZZ_SECONDS each under ASan/UBSan, then pytest; then
+#               tools/check_tests_ran.py: everything in tests/expected_tests.txt ran, nothing else
 #   make fuzz   the libFuzzer targets for longer (FUZZ_SECONDS=600 each)
 #   make bench  urt_step against MuJoCo mj_step and Pinocchio ABA (build/bench.json), then the
 #               running emulator: 30003 jitter with 8 clients, overruns, memory (bench_ports.json)
@@ -54,14 +55,18 @@ build-asan: deps
 
 # ---- tests -----------------------------------------------------------------------------
 test: test-unit test-asan test-fuzz test-python
+	$(PY) tools/check_tests_ran.py --expected tests/expected_tests.txt \
+	  --ctest build/ctest-junit.xml --ctest-asan build-asan/ctest-junit.xml \
+	  --fuzz-logs build-asan --pytest build/pytest-junit.xml
 
 test-unit: build
-	ctest --test-dir build --output-on-failure -j $(JOBS)
+	ctest --test-dir build --output-on-failure -j $(JOBS) --output-junit $(abspath build)/ctest-junit.xml
 
 # the CVODE comparison is left to the release run: under ASan it would take most of an hour
 test-asan: build-asan
 	ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-	  ctest --test-dir build-asan --output-on-failure -j $(JOBS) -E '^reference/'
+	  ctest --test-dir build-asan --output-on-failure -j $(JOBS) -E '^reference/' \
+	    --output-junit $(abspath build-asan)/ctest-junit.xml
 
 # every libFuzzer target for FUZZ_SECONDS under ASan/UBSan; corpora persist in build-asan/fuzz-corpus
 FUZZ_SECONDS ?= 30
@@ -78,7 +83,7 @@ fuzz:
 	$(MAKE) test-fuzz FUZZ_SECONDS=600
 
 test-python: build
-	URT_BUILD=$(abspath build) $(PY) -m pytest -q tests/python
+	URT_BUILD=$(abspath build) $(PY) -m pytest -q -rs tests/python --junitxml=$(abspath build)/pytest-junit.xml
 
 # ---- benchmarks and tools --------------------------------------------------------------
 bench: build
