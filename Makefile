@@ -16,7 +16,7 @@ APT_PACKAGES := build-essential cmake pkg-config libeigen3-dev libsundials-dev l
   libyaml-cpp-dev liblcm-dev liblcm-bin cyclonedds-dev cyclonedds-tools libcli11-dev \
   python3 python3-venv python3-pip clang libclang-rt-14-dev libglib2.0-dev
 
-.PHONY: all deps apt venv build build-asan test test-unit test-asan test-fuzz test-python bench run \
+.PHONY: all deps apt venv build build-asan build-tsan test test-unit test-asan test-tsan test-fuzz test-python bench run \
   clean fuzz reference-compare plots
 
 all: build
@@ -53,14 +53,28 @@ build-asan: deps
 	  -DURT_FUZZ=ON -DURT_WITH_SUNDIALS=OFF -DURT_BUILD_TOOLS=OFF >/dev/null
 	cmake --build build-asan -j $(JOBS)
 
+# ThreadSanitizer over the code that shares data between threads: the seqlock, the command
+# rings and the physics loop with its readers (TSan and ASan exclude each other: a tree of its own)
+TSAN_TESTS := core/seqlock core/spsc_ring core/loop
+build-tsan: deps
+	CC=clang CXX=clang++ cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=Debug -DURT_TSAN=ON \
+	  -DURT_WITH_SUNDIALS=OFF -DURT_BUILD_TOOLS=OFF >/dev/null
+	cmake --build build-tsan -j $(JOBS) --target $(foreach t,$(TSAN_TESTS),test_$(subst /,_,$(t)))
+
 # ---- tests -----------------------------------------------------------------------------
-test: test-unit test-asan test-fuzz test-python
+test: test-unit test-asan test-tsan test-fuzz test-python
 	$(PY) tools/check_tests_ran.py --expected tests/expected_tests.txt \
 	  --ctest build/ctest-junit.xml --ctest-asan build-asan/ctest-junit.xml \
+	  --ctest-tsan build-tsan/ctest-junit.xml \
 	  --fuzz-logs build-asan --pytest build/pytest-junit.xml
 
 test-unit: build
 	ctest --test-dir build --output-on-failure -j $(JOBS) --output-junit $(abspath build)/ctest-junit.xml
+
+test-tsan: build-tsan
+	TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" ctest --test-dir build-tsan \
+	  --output-on-failure -j $(JOBS) -R '^($(subst $(eval) ,|,$(TSAN_TESTS)))$$' \
+	  --output-junit $(abspath build-tsan)/ctest-junit.xml
 
 # the CVODE comparison is left to the release run: under ASan it would take most of an hour
 test-asan: build-asan
@@ -107,4 +121,4 @@ run: build
 	build/tools/urtwin --config config/ur5.yaml --bind 127.0.0.1
 
 clean:
-	rm -rf build build-asan
+	rm -rf build build-asan build-tsan

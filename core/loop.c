@@ -290,7 +290,7 @@ void urt_loop_get_stats(const urt_loop_t *l, urt_loop_stats_t *out) {
   uint64_t dropped = 0;
   int n = atomic_load(&l->n_producers);
   for (int i = 0; i < n; i++) {
-    dropped += l->ring[i].dropped;  // producer-owned counter: a snapshot is good enough here
+    dropped += atomic_load_explicit(&l->ring[i].dropped, memory_order_relaxed);  // producer-owned
   }
   out->ticks = urt_loop_latest_tick(l);
   out->overruns = atomic_load(&l->overruns);
@@ -377,7 +377,7 @@ static void publish_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
   uint64_t dropped = 0;
   int n = atomic_load_explicit(&l->n_producers, memory_order_acquire);
   for (int i = 0; i < n; i++) {
-    dropped += l->ring[i].dropped;
+    dropped += atomic_load_explicit(&l->ring[i].dropped, memory_order_relaxed);
   }
   s->cmd_dropped = dropped;
   urt_seqlock_write(&l->history[tick % URT_LOOP_HISTORY], s);

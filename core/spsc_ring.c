@@ -12,7 +12,7 @@ int urt_spsc_ring_init(urt_spsc_ring_t *r, void *storage, size_t capacity, size_
   }
   atomic_init(&r->head, 0);
   atomic_init(&r->tail, 0);
-  r->dropped = 0;
+  atomic_init(&r->dropped, 0);
   r->elem_size = elem_size;
   r->capacity = capacity;
   r->slots = storage;
@@ -25,7 +25,10 @@ bool urt_spsc_ring_try_push(urt_spsc_ring_t *r, const void *msg) {
   uint64_t head = atomic_load_explicit(&r->head, memory_order_relaxed);
   uint64_t tail = atomic_load_explicit(&r->tail, memory_order_acquire);
   if (head - tail >= r->capacity) {
-    r->dropped++;
+    // one writer, so load + store is exact; atomic so that a reader on another thread (the
+    // loop's statistics) reads a whole value, not a torn or racing one
+    atomic_store_explicit(&r->dropped, atomic_load_explicit(&r->dropped, memory_order_relaxed) + 1,
+                          memory_order_relaxed);
     return false;
   }
   memcpy(r->slots + (head & (r->capacity - 1)) * r->elem_size, msg, r->elem_size);

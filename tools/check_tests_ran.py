@@ -12,6 +12,7 @@ in the same commit that adds it).
   check_tests_ran.py --expected tests/expected_tests.txt
       --ctest build/ctest-junit.xml            (release CMocka run: every [ctest] name)
       --ctest-asan build-asan/ctest-junit.xml  (ASan run: every [ctest] name but reference/*)
+      --ctest-tsan build-tsan/ctest-junit.xml  (ThreadSanitizer run: every [tsan] name)
       --fuzz-logs build-asan                   (fuzz_<name>.log with libFuzzer's 'Done' line)
       --pytest build/pytest-junit.xml          (every [pytest] file with at least one test)
 
@@ -110,6 +111,7 @@ def main(argv=None):
     ap.add_argument("--expected", required=True)
     ap.add_argument("--ctest")
     ap.add_argument("--ctest-asan")
+    ap.add_argument("--ctest-tsan")
     ap.add_argument("--fuzz-logs")
     ap.add_argument("--pytest")
     a = ap.parse_args(argv)
@@ -124,6 +126,10 @@ def main(argv=None):
         names = ctest_names(a.ctest_asan)
         problems += compare("ctest (asan)", want, names)
         counts.append(f"ctest asan {len(names)}/{len(want)}")
+    if a.ctest_tsan:
+        names = ctest_names(a.ctest_tsan)
+        problems += compare("ctest (tsan)", exp.get("tsan", []), names)
+        counts.append(f"ctest tsan {len(names)}/{len(exp.get('tsan', []))}")
     if a.fuzz_logs:
         want = exp.get("fuzz", [])
         ran = fuzz_run(a.fuzz_logs, want)

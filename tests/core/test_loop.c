@@ -2,6 +2,7 @@
  * tests/core/test_loop.c — the hard loop: ticks and their snapshots, the history, command
  * rings, lockstep grants and the drive-sample stream. */
 #include <math.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <string.h>
 #include <sys/eventfd.h>
@@ -12,6 +13,19 @@
 #include "test_support.h"
 #include "urt/core.h"
 #include "urt/loop.h"
+
+#if defined(__SANITIZE_THREAD__)
+#define URT_TSAN_BUILD 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define URT_TSAN_BUILD 1
+#endif
+#endif
+
+#ifdef URT_TSAN_BUILD
+#pragma GCC diagnostic ignored "-Wunused-function"  // the timing tests, left out of main below
+#endif
+
 
 static urt_model_t *g_model;
 
@@ -177,6 +191,16 @@ static void test_loop__drive_samples_at_their_rate(void **state) {
 }
 
 int main(void) {
+#ifdef URT_TSAN_BUILD
+  // Under ThreadSanitizer a step costs ~100x its release time, so the tests that need the
+  // physics to keep wall-clock or 5 s deadlines cannot pass; the race check is what the TSan
+  // run is for, and these two drive the physics thread, the rings and the snapshot readers.
+  puts("core/loop under ThreadSanitizer: only the free-paced tests (timing tests need release speed)");
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_loop__refuses_fractional_period),
+      cmocka_unit_test(test_loop__commands_reach_the_controller),
+  };
+#else
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_loop__refuses_fractional_period),
       cmocka_unit_test(test_loop__tick_pacing_follows_wall_time),
@@ -185,5 +209,6 @@ int main(void) {
       cmocka_unit_test(test_loop__commands_reach_the_controller),
       cmocka_unit_test(test_loop__drive_samples_at_their_rate),
   };
+#endif
   return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -19,7 +19,8 @@ extern "C" {
 typedef struct urt_spsc_ring {
   _Alignas(64) _Atomic uint64_t head;  /* next slot to write (producer) */
   _Alignas(64) _Atomic uint64_t tail;  /* next slot to read (consumer)  */
-  _Alignas(64) uint64_t dropped;       /* pushes refused because full (producer-owned) */
+  _Alignas(64) _Atomic uint64_t dropped; /* pushes refused because full (written by the
+                                          producer only, read by anyone: relaxed) */
   size_t elem_size;                    /* bytes per message */
   size_t capacity;                     /* messages, a power of two */
   unsigned char *slots;                /* capacity · elem_size bytes, caller-owned */
