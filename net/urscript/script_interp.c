@@ -26,7 +26,7 @@
 //---- errors and scratch memory ----
 
 int urt__us_fail(vm *V, const us_node *at, const char *fmt, ...) {
-  if (V->err->kind != US_ERR_NONE) {
+  if (V->err->kind != US_ERR_NONE || urt__us_unwinding(V)) {
     return X_ERR;
   }
   V->err->kind = US_ERR_RUNTIME;
@@ -150,23 +150,26 @@ static var *add_var(vm *V, const us_node *at, frame *f, const us_name *name) {
   return v;
 }
 
+/* the frame of the running function (depth 0: the globals) */
+static frame *cur_frame(vm *V) { return V->depth == 0 ? V->globals : &V->frames[V->depth]; }
+
 /* the variable a read sees: a local, else a program variable */
 static var *lookup(vm *V, const us_name *name) {
-  var *v = find_in(&V->frames[V->depth], name);
+  var *v = find_in(cur_frame(V), name);
   if (v && v->is_global) {
     v = NULL;
   } else if (v) {
     return v;
   }
-  return find_in(&V->frames[0], name);
+  return find_in(V->globals, name);
 }
 
 /* the variable an assignment writes: `global` declared → program frame; else local */
 static var *lookup_write(vm *V, const us_node *at, const us_name *name) {
-  frame *f = &V->frames[V->depth];
+  frame *f = cur_frame(V);
   var *v = find_in(f, name);
   if (v && v->is_global) {
-    f = &V->frames[0];
+    f = V->globals;
     v = find_in(f, name);
   }
   return v ? v : add_var(V, at, f, name);
@@ -177,7 +180,7 @@ static size_t vbytes(const sv *v) {
 }
 
 static int store(vm *V, const us_node *at, var *dst, const sv *val) {
-  size_t before = V->var_bytes - vbytes(&dst->v);
+  size_t before = *V->var_bytes - vbytes(&dst->v);
   if (before + vbytes(val) > MAX_VAR_BYTES) {
     return urt__us_fail(V, at, "Out of memory: variables hold more than %u bytes", MAX_VAR_BYTES);
   }
@@ -187,13 +190,13 @@ static int store(vm *V, const us_node *at, var *dst, const sv *val) {
   }
   vfree(&dst->v);
   dst->v = copy;
-  V->var_bytes = before + vbytes(&copy);
+  *V->var_bytes = before + vbytes(&copy);
   return X_OK;
 }
 
 static void frame_clear(vm *V, frame *f) {
   for (int k = 0; k < f->n; k++) {
-    V->var_bytes -= vbytes(&f->vars[k].v);
+    *V->var_bytes -= vbytes(&f->vars[k].v);
     vfree(&f->vars[k].v);
   }
   f->n = 0;
@@ -542,6 +545,12 @@ static int eval(vm *V, const us_node *n, sv *out) {
     }
     case N_BINARY: rc = eval_binary(V, n, out); break;
     case N_CALL: rc = n->def ? call_user(V, n, out) : call_builtin(V, n, out); break;
+    case N_RUN: {
+      int64_t handle = 0;
+      rc = urt__us_thread_run(V, n, n->def, &handle);
+      if (rc == X_OK) *out = mk_int(handle);
+      break;
+    }
     default: rc = urt__us_fail(V, n, "internal: not an expression"); break;
   }
   V->eval_depth--;
@@ -601,15 +610,15 @@ static int exec_stmt(vm *V, const us_node *n) {
     case N_ASSIGN: rc = exec_assign(V, n); break;
     case N_GLOBAL:
     case N_LOCAL: {
-      frame *f = &V->frames[V->depth];
+      frame *f = cur_frame(V);
       var *v = find_in(f, n->name);
       if (n->kind == N_GLOBAL && V->depth > 0) {
         // mark the name as the program's in this frame, then write there
         if (!v && !(v = add_var(V, n, f, n->name))) { rc = X_ERR; break; }
-        V->var_bytes -= vbytes(&v->v);
+        *V->var_bytes -= vbytes(&v->v);
         vfree(&v->v);
         v->is_global = true;
-        f = &V->frames[0];
+        f = V->globals;
         v = find_in(f, n->name);
       } else if (v && v->is_global) {
         v->is_global = false;
@@ -665,6 +674,20 @@ static int exec_stmt(vm *V, const us_node *n) {
       if (rc == X_OK) rc = X_RETURN;
       break;
     case N_HALT: rc = X_HALT; break;
+    case N_JOIN:
+    case N_KILL: {
+      sv h;
+      rc = eval(V, n->a, &h);
+      if (rc != X_OK) break;
+      if (h.t != V_INT) {
+        rc = urt__us_fail(V, n->a, "Type error: %s needs a thread handle, got %s",
+                          n->kind == N_JOIN ? "join" : "kill", type_name(h.t));
+        break;
+      }
+      rc = n->kind == N_JOIN ? urt__us_thread_join(V, n, h.u.i) : urt__us_thread_kill(V, n, h.u.i);
+      break;
+    }
+    case N_CRITICAL: rc = urt__us_critical(V, n, n->flag != 0); break;
     case N_BREAK: rc = X_BREAK; break;
     case N_CONTINUE: rc = X_CONTINUE; break;
     case N_DEF: break;  // functions are resolved at compile time
@@ -683,53 +706,33 @@ static int exec_block(vm *V, const us_node *b) {
   return X_OK;
 }
 
-//---- entry ----
+//---- entry (the scheduler runs each thread's body through these) ----
 
-int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
-  memset(err, 0, sizeof *err);
+vm *urt__us_vm_new(const us_prog *p, const us_hooks *h, us_err *err, frame *globals,
+                   size_t *var_bytes) {
   vm *V = calloc(1, sizeof *V);
   if (!V) {
-    err->kind = US_ERR_RUNTIME;
-    snprintf(err->text, sizeof err->text, "Out of memory");
-    return -1;
+    return NULL;
   }
   V->scratch = malloc(SCRATCH_BYTES);
   if (!V->scratch) {
     free(V);
-    err->kind = US_ERR_RUNTIME;
-    snprintf(err->text, sizeof err->text, "Out of memory");
-    return -1;
+    return NULL;
   }
   V->prog = p;
   V->h = h;
   V->err = err;
-  V->tick = urt__us_snap(V)->tick;
+  V->globals = globals ? globals : &V->frames[0];
+  V->var_bytes = var_bytes;
+  return V;
+}
 
-  // the program body runs in frame 0; its parameters (if any) take their defaults
-  const us_node *d = p->main;
-  int rc = X_OK;
-  for (int j = 0; j < d->n && rc == X_OK; j++) {
-    sv v;
-    var *slot = add_var(V, d, &V->frames[0], d->argn[j]);
-    if (!slot) {
-      rc = X_ERR;
-    } else if (!d->kids[j]) {
-      rc = urt__us_fail(V, d, "Type error: %.*s: missing argument %.*s", d->name->len, d->name->s,
-                        d->argn[j]->len, d->argn[j]->s);
-    } else if ((rc = eval(V, d->kids[j], &v)) == X_OK) {
-      rc = store(V, d, slot, &v);
-    }
-  }
-  if (rc == X_OK) {
-    rc = exec_block(V, d->a);
-  }
-  if (rc == X_BREAK || rc == X_CONTINUE) {
-    rc = urt__us_fail(V, d, "break or continue outside a loop");
-  }
-  if (rc == X_ERR && V->halted && err->kind == US_ERR_NONE) {
-    rc = X_HALT;
-  }
+frame *urt__us_vm_globals(vm *V) { return V->globals; }
 
+void urt__us_vm_free(vm *V) {
+  if (!V) {
+    return;
+  }
   for (int k = 0; k <= MAX_CALL_DEPTH; k++) {
     frame_clear(V, &V->frames[k]);
     free(V->frames[k].vars);
@@ -737,5 +740,41 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
   vfree(&V->retval);
   free(V->scratch);
   free(V);
-  return rc == X_ERR ? -1 : 0;
+}
+
+/* X_OK (ended, returned or halted: V->halted tells a halt) or X_ERR with the error recorded */
+int urt__us_vm_body(vm *V, const us_node *d, bool is_main) {
+  int rc = X_OK;
+  if (is_main) {
+    // the program body runs in frame 0; its parameters (if any) take their defaults
+    V->depth = 0;
+    for (int j = 0; j < d->n && rc == X_OK; j++) {
+      sv v;
+      var *slot = add_var(V, d, V->globals, d->argn[j]);
+      if (!slot) {
+        rc = X_ERR;
+      } else if (!d->kids[j]) {
+        rc = urt__us_fail(V, d, "Type error: %.*s: missing argument %.*s", d->name->len,
+                          d->name->s, d->argn[j]->len, d->argn[j]->s);
+      } else if ((rc = eval(V, d->kids[j], &v)) == X_OK) {
+        rc = store(V, d, slot, &v);
+      }
+    }
+  } else {
+    // a thread's body: its own locals in frame 1, the program's variables seen through
+    V->depth = 1;
+    frame_clear(V, &V->frames[1]);
+  }
+  if (rc == X_OK) {
+    rc = exec_block(V, d->a);
+  }
+  if (rc == X_BREAK || rc == X_CONTINUE) {
+    rc = urt__us_fail(V, d, "break or continue outside a loop");
+  }
+  if (rc == X_HALT || (rc == X_ERR && V->halted && V->err->kind == US_ERR_NONE &&
+                       !urt__us_unwinding(V))) {
+    V->halted = true;
+    return X_OK;
+  }
+  return rc == X_ERR ? X_ERR : X_OK;
 }

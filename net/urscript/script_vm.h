@@ -81,23 +81,32 @@ typedef struct frame {
   int n, cap;
 } frame;
 
+struct us_sched;   /* the program's threads and their scheduler (script_sched.c) */
+struct us_thread;
+
+/* One URScript thread's view of the running program: builtins get the running thread's vm.
+ * The program's threads share prog, hooks, err, the globals frame and the variable budget;
+ * each has its own locals, scratch, call depth and step count. */
 typedef struct vm {
   const us_prog *prog;
   const us_hooks *h;
-  us_err *err;
+  us_err *err;           /* shared: the first error of any thread stops the program */
+  struct us_sched *S;
+  struct us_thread *T;   /* this thread */
   /* scratch stack for temporaries */
   char *scratch;
   size_t used;
-  /* frames: 0 = program body (globals) */
+  /* frames: 0 = program body (the globals, *globals: the main thread's frames[0]) */
   frame frames[MAX_CALL_DEPTH + 1];
-  int depth;        /* current frame index */
+  frame *globals;
+  int depth;        /* current frame index (a thread's body runs at 1) */
   int eval_depth;
   sv retval;        /* heap-owned value of the last `return` */
   bool halted;      /* `halt` inside a function: unwinds as X_ERR with no error */
-  size_t var_bytes; /* heap held by variables (bounded by MAX_VAR_BYTES) */
-  /* time */
+  size_t *var_bytes; /* shared: heap held by variables (bounded by MAX_VAR_BYTES) */
+  /* time: the controller tick the scheduler is running (every thread sees the same) */
   uint64_t tick;
-  int64_t steps;
+  int64_t steps;    /* steps since this thread last yielded */
   urt_snapshot_t snap;
 } vm;
 
@@ -108,6 +117,30 @@ int urt__us_fail(vm *V, const us_node *at, const char *fmt, ...);
 
 /* n bytes of scratch, 16-aligned, freed after the statement; NULL (error set) when full. */
 void *urt__us_salloc(vm *V, const us_node *at, size_t n);
+
+//---- threads (script_sched.c) ----
+
+/* The interpreter's side, called by the scheduler (script_interp.c): a thread's vm, and running
+ * the program body (is_main: frame 0, parameters take their defaults) or a thread's body. */
+vm *urt__us_vm_new(const us_prog *p, const us_hooks *h, us_err *err, frame *globals,
+                   size_t *var_bytes);
+void urt__us_vm_free(vm *V);
+frame *urt__us_vm_globals(vm *V);
+int urt__us_vm_body(vm *V, const us_node *def, bool is_main);
+
+/* Suspend the running thread until the next controller tick (the one primitive every wait goes
+ * through). X_ERR when the thread was killed or the program stopped meanwhile (nothing
+ * recorded: the unwinding is silent). */
+int urt__us_yield(vm *V);
+
+/* run name() → *handle; join h; kill h; enter_critical / exit_critical */
+int urt__us_thread_run(vm *V, const us_node *at, const us_node *def, int64_t *handle);
+int urt__us_thread_join(vm *V, const us_node *at, int64_t handle);
+int urt__us_thread_kill(vm *V, const us_node *at, int64_t handle);
+int urt__us_critical(vm *V, const us_node *at, bool enter);
+
+/* Whether this thread is being unwound (killed, or the program stops): errors go unrecorded. */
+bool urt__us_unwinding(const vm *V);
 
 //---- the controller (script_controller.c) ----
 
@@ -123,7 +156,8 @@ int urt__us_submit(vm *V, const us_node *at, const urt_ctrl_cmd_t *cmd);
 /* Submit a motion and, if wait, block until the controller reports it done. */
 int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *cmd, bool wait);
 
-/* Block for t seconds of controller time, checking the motion is not refused if asked. */
+/* Block for t seconds of controller time (whole ticks, counted by the scheduler, not read from
+ * the clock: a late VM catches up and never lags), checking the motion is not refused if asked. */
 int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, const char *what);
 
 //---- builtins (script_builtins*.c) ----
