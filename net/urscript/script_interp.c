@@ -164,11 +164,13 @@ static var *lookup(vm *V, const us_name *name) {
   return find_in(V->globals, name);
 }
 
-/* the variable an assignment writes: `global` declared → program frame; else local */
+/* the variable an assignment writes (UR's scoping rules): `global` declared → the program
+ * frame; a local (parameter, `local`, or assigned before) → it; a free name → the program's
+ * variable if there is one, else a new local */
 static var *lookup_write(vm *V, const us_node *at, const us_name *name) {
   frame *f = cur_frame(V);
   var *v = find_in(f, name);
-  if (v && v->is_global) {
+  if ((v && v->is_global) || (!v && V->depth > 0 && find_in(V->globals, name))) {
     f = V->globals;
     v = find_in(f, name);
   }

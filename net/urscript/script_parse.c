@@ -380,7 +380,21 @@ static us_node *parse_primary(parser *P) {
     case T_POSE:
       advance(P);
       n = new_node(P, N_POSE, &t);
-      return n ? parse_list_tail(P, n, T_RB) : NULL;
+      if (n) parse_list_tail(P, n, T_RB);
+      if (n && !P->failed && n->n == 1) {
+        // `p[i]`: an element of a variable named p (a pose literal has six), as in ur_rtde's
+        // `def scale_pose(p, factor): p[0] = p[0] * factor`
+        us_node *base = new_node(P, N_NAME, &t);
+        if (!base) return NULL;
+        base->name = intern(P, "p", 1);
+        us_node *ix = n->kids[0];
+        n->kind = N_INDEX;
+        n->a = base;
+        n->b = ix;
+        n->n = 0;
+        n->kids = NULL;
+      }
+      return n;
     case T_LP: {
       advance(P);
       us_node *e = parse_expr(P);

@@ -203,6 +203,28 @@ static void test_interp__functions_scopes_and_control_flow(void **state) {
   assert_string_equal(R.f.msg[3].text, "3.51");
 }
 
+static void test_interp__free_variable_in_a_function_is_the_global(void **state) {
+  // UR's scoping rules: a free name is the program's variable if one exists, `local` masks it,
+  // and a name no program variable has stays local to the call
+  must_run("def prog():\n"
+           "  count = 0\n"
+           "  def bump():\n"
+           "    count = count + 1\n"
+           "    fresh = 7\n"
+           "  end\n"
+           "  def shadow():\n"
+           "    local count = 100\n"
+           "    count = count + 1\n"
+           "  end\n"
+           "  fresh = 1\n"
+           "  bump()\n"
+           "  bump()\n"
+           "  shadow()\n"
+           "  textmsg(count, fresh)\n"
+           "end\n");
+  assert_string_equal(R.f.msg[0].text, "27");
+}
+
 static void test_interp__halt_inside_a_function_ends_the_program_normally(void **state) {
   must_run("def stop_here():\n  halt\nend\ntextmsg(\"a\")\nx = 1 + stop_here()\ntextmsg(\"b\")\n");
   assert_int_equal(R.f.n_msg, 1);
@@ -301,6 +323,7 @@ int main(void) {
       cmocka_unit_test_setup(test_interp__io_and_settings, setup),
       cmocka_unit_test_setup(test_interp__textmsg_concatenates, setup),
       cmocka_unit_test_setup(test_interp__functions_scopes_and_control_flow, setup),
+      cmocka_unit_test_setup(test_interp__free_variable_in_a_function_is_the_global, setup),
       cmocka_unit_test_setup(test_interp__halt_inside_a_function_ends_the_program_normally, setup),
       cmocka_unit_test_setup(test_interp__pose_functions, setup),
       cmocka_unit_test_setup(test_interp__loop_that_never_yields_is_too_much_behind, setup),

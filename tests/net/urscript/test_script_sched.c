@@ -52,7 +52,7 @@ static const char kTwoThreads[] =
     "      servoj([1, i, 0, 0, 0, 0], t=0.002)\n"
     "      i = i + 1\n"
     "    end\n"
-    "    done = done + 1\n"  /* a local: `done` is not declared global here */
+    "    done = done + 1\n"  /* free: the program's variable (UR's scoping rules) */
     "  end\n"
     "  thread b():\n"
     "    global done\n"
@@ -68,7 +68,7 @@ static const char kTwoThreads[] =
     "  tb = run b()\n"
     "  join ta\n"
     "  join tb\n"
-    "  set_standard_digital_out(7, done == 1)\n"
+    "  set_standard_digital_out(7, done == 2)\n"
     "end\n";
 
 static void test_sched__threads_interleave_one_tick_per_wait(void **state) {
@@ -94,7 +94,7 @@ static void test_sched__threads_interleave_one_tick_per_wait(void **state) {
   // in a tick where both act, a (created first) comes first
   int ka = fake_find_cmd(&F, URT_CTRL_SERVOJ, 0), kb = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, 0);
   assert_true(ka < kb);
-  // b's `global done` reached the program's variable, a's assignment stayed local
+  // both threads' `done` is the program's variable, each thread's `i` its own
   const urt_ctrl_cmd_t *last = &F.cmd[F.n_cmd - 1];
   assert_int_equal(last->kind, URT_CTRL_SET_DIGITAL_OUT);
   assert_int_equal(last->index, 7);
