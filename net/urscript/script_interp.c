@@ -53,7 +53,7 @@ void *urt__us_salloc(vm *V, const us_node *at, size_t n) {
 //---- values ----
 
 static void vfree(sv *v) {
-  if (v->t == V_STR || v->t == V_LIST) {
+  if (v->t == V_STR || is_flat(v)) {
     free((void *)(v->t == V_STR ? (void *)v->u.s : (void *)v->u.l));
   }
   memset(v, 0, sizeof *v);
@@ -68,7 +68,7 @@ static bool vdup(const sv *src, sv *dst) {
     memcpy(s, src->u.s, (size_t)src->n);
     s[src->n] = 0;
     dst->u.s = s;
-  } else if (src->t == V_LIST) {
+  } else if (is_flat(src)) {
     sv *l = malloc((size_t)(src->n ? src->n : 1) * sizeof *l);
     if (!l) return false;
     memcpy(l, src->u.l, (size_t)src->n * sizeof *l);
@@ -86,7 +86,7 @@ static bool vscratch(vm *V, const us_node *at, const sv *src, sv *dst) {
     memcpy(s, src->u.s, (size_t)src->n);
     s[src->n] = 0;
     dst->u.s = s;
-  } else if (src->t == V_LIST) {
+  } else if (is_flat(src)) {
     sv *l = urt__us_salloc(V, at, (size_t)(src->n ? src->n : 1) * sizeof *l);
     if (!l) return false;
     memcpy(l, src->u.l, (size_t)src->n * sizeof *l);
@@ -104,6 +104,19 @@ int urt__us_fmt_value(const sv *v, char *buf, size_t cap) {
     case V_POSE:
       return snprintf(buf, cap, "p[%.6g,%.6g,%.6g,%.6g,%.6g,%.6g]", v->u.p[0], v->u.p[1],
                       v->u.p[2], v->u.p[3], v->u.p[4], v->u.p[5]);
+    case V_MATRIX: {
+      // [[a,b],[c,d]]: the rows as lists
+      size_t at = (size_t)snprintf(buf, cap, "[");
+      int cols = v->cols ? v->cols : 1;
+      for (int r = 0; r * cols < v->n && at < cap; r++) {
+        sv row = {.t = V_LIST, .n = cols};
+        row.u.l = v->u.l + r * cols;
+        if (r) at += (size_t)snprintf(buf + at, cap - at, ",");
+        if (at < cap) at += (size_t)urt__us_fmt_value(&row, buf + at, cap - at);
+      }
+      if (at < cap) at += (size_t)snprintf(buf + at, cap - at, "]");
+      return (int)at;
+    }
     case V_LIST: {
       size_t at = 0;
       at += (size_t)snprintf(buf, cap, "[");
@@ -178,7 +191,7 @@ static var *lookup_write(vm *V, const us_node *at, const us_name *name) {
 }
 
 static size_t vbytes(const sv *v) {
-  return v->t == V_STR ? (size_t)v->n + 1 : v->t == V_LIST ? (size_t)v->n * sizeof(sv) : 0;
+  return v->t == V_STR ? (size_t)v->n + 1 : is_flat(v) ? (size_t)v->n * sizeof(sv) : 0;
 }
 
 static int store(vm *V, const us_node *at, var *dst, const sv *val) {
@@ -269,8 +282,9 @@ static bool values_equal(const sv *a, const sv *b) {
     case V_BOOL: return (a->u.i != 0) == (b->u.i != 0);
     case V_STR: return a->n == b->n && memcmp(a->u.s, b->u.s, (size_t)a->n) == 0;
     case V_POSE: return memcmp(a->u.p, b->u.p, sizeof a->u.p) == 0;
+    case V_MATRIX:
     case V_LIST:
-      if (a->n != b->n) return false;
+      if (a->n != b->n || a->cols != b->cols) return false;
       for (int k = 0; k < a->n; k++) {
         if (!values_equal(&a->u.l[k], &b->u.l[k])) return false;
       }
@@ -333,7 +347,7 @@ static int eval_list(vm *V, const us_node *n, sv *out) {
   if (!l) return X_ERR;
   for (int k = 0; k < n->n; k++) {
     if (eval(V, n->kids[k], &l[k]) != X_OK) return X_ERR;
-    if (l[k].t == V_LIST || l[k].t == V_STR || l[k].t == V_NONE) {
+    if (is_flat(&l[k]) || l[k].t == V_STR || l[k].t == V_NONE) {
       return urt__us_fail(V, n->kids[k], "Type error: a list cannot hold a %s", type_name(l[k].t));
     }
   }
@@ -370,6 +384,27 @@ static int eval_index(vm *V, const us_node *n, sv *out) {
   sv base;
   if (eval(V, n->a, &base) != X_OK || eval(V, n->b, &ix) != X_OK) return X_ERR;
   int k;
+  if (base.t == V_MATRIX) {
+    // m[i, j]: an element; m[i]: row i as a list
+    int cols = base.cols ? base.cols : 1, rows = base.n / cols;
+    if (index_of(V, n->b, &ix, rows, &k) != X_OK) return X_ERR;
+    if (n->n == 1) {
+      sv jx;
+      int j;
+      if (eval(V, n->kids[0], &jx) != X_OK || index_of(V, n->kids[0], &jx, cols, &j) != X_OK) {
+        return X_ERR;
+      }
+      *out = base.u.l[k * cols + j];
+      return X_OK;
+    }
+    out->t = V_LIST;
+    out->n = cols;
+    out->u.l = base.u.l + k * cols;  // scratch or the variable's copy: read-only here
+    return X_OK;
+  }
+  if (n->n == 1) {
+    return urt__us_fail(V, n, "Type error: %s has no [row, column] elements", type_name(base.t));
+  }
   if (base.t == V_POSE) {
     if (index_of(V, n->b, &ix, 6, &k) != X_OK) return X_ERR;
     *out = mk_float(base.u.p[k]);
@@ -590,7 +625,7 @@ static int exec_assign(vm *V, const us_node *n) {
   }
   if (v->v.t == V_LIST) {
     if (index_of(V, n->a, &ix, v->v.n, &k) != X_OK) return X_ERR;
-    if (val.t == V_LIST || val.t == V_STR || val.t == V_NONE) {
+    if (is_flat(&val) || val.t == V_STR || val.t == V_NONE) {
       return urt__us_fail(V, n->b, "Type error: a list cannot hold a %s", type_name(val.t));
     }
     v->v.u.l[k] = val;

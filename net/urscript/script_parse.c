@@ -446,6 +446,12 @@ static us_node *parse_postfix(parser *P) {
       }
       ix->a = e;
       ix->b = parse_expr(P);
+      if (!P->failed && accept(P, T_COMMA)) {
+        // m[i, j]: a matrix element; the column index is the one kid
+        nlist l = {0};
+        nlist_push(P, &l, parse_expr(P), NULL);
+        nlist_finish(P, &l, ix, false);
+      }
       expect(P, T_RB);
       e = ix;
     } else {
@@ -806,7 +812,8 @@ static us_node *parse_stmt(parser *P) {
       if (P->t.kind == T_ASSIGN) {
         tok at = P->t;
         // targets: name or name[index] (digital_out[2]=True is python-urx's CB2 syntax)
-        if (!(lhs->kind == N_NAME || (lhs->kind == N_INDEX && lhs->a && lhs->a->kind == N_NAME))) {
+        if (!(lhs->kind == N_NAME ||
+              (lhs->kind == N_INDEX && lhs->n == 0 && lhs->a && lhs->a->kind == N_NAME))) {
           syntax_error(P, &at);
           return NULL;
         }

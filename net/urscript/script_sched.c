@@ -81,6 +81,7 @@ typedef struct us_sched {
   us_thread *main;
   int64_t next_id;
   int64_t critical;         /* handle of the thread between enter_ and exit_critical, 0 none */
+  us_force_state force;
   bool stopping;            /* the program ends: every thread unwinds without recording      */
   bool halted;
   ucontext_t ctx;           /* the scheduler (the runner thread's own stack)                 */
@@ -125,6 +126,8 @@ static void resume(us_sched *S, us_thread *t) {
     S->critical = 0;  // a thread that ends inside a critical section leaves it
   }
 }
+
+us_force_state *urt__us_force_state(vm *V) { return &V->S->force; }
 
 bool urt__us_unwinding(const vm *V) {
   return V->S && (V->S->stopping || (V->T && V->T->killed));
@@ -354,6 +357,8 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
   S->prog = p;
   S->h = h;
   S->err = err;
+  S->force.damping = 0.005;       // UR's defaults
+  S->force.gain_scaling = 1.0;
   urt_snapshot_t s;
   h->host->snapshot(h->host->ctx, &s);
   S->tick = s.tick;

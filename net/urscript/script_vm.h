@@ -19,11 +19,13 @@
 
 //---- values ----
 
-enum { V_NONE = 0, V_BOOL, V_INT, V_FLOAT, V_STR, V_LIST, V_POSE };
+/* V_MATRIX: n = rows·cols floats in u.l, row-major (get_mass_matrix, get_jacobian: 6×6) */
+enum { V_NONE = 0, V_BOOL, V_INT, V_FLOAT, V_STR, V_LIST, V_POSE, V_MATRIX };
 
 typedef struct sv {
   uint8_t t;
-  int32_t n;  /* V_STR: bytes; V_LIST: elements */
+  uint16_t cols; /* V_MATRIX: columns */
+  int32_t n;  /* V_STR: bytes; V_LIST, V_MATRIX: elements */
   union {
     int64_t i;  /* V_INT, V_BOOL */
     double f;
@@ -34,8 +36,9 @@ typedef struct sv {
 } sv;
 
 static inline const char *type_name(int t) {
-  static const char *const names[] = {"none", "bool", "int", "float", "string", "list", "pose"};
-  return t >= 0 && t <= V_POSE ? names[t] : "?";
+  static const char *const names[] = {"none",   "bool", "int",  "float",
+                                       "string", "list", "pose", "matrix"};
+  return t >= 0 && t <= V_MATRIX ? names[t] : "?";
 }
 
 static inline bool is_num(const sv *v) { return v->t == V_INT || v->t == V_FLOAT; }
@@ -50,6 +53,9 @@ static inline sv mk_pose(const double p[6]) {
   memcpy(v.u.p, p, sizeof v.u.p);
   return v;
 }
+
+/* flat element storage: lists and matrices */
+static inline bool is_flat(const sv *v) { return v->t == V_LIST || v->t == V_MATRIX; }
 
 static inline bool truthy(const sv *v) {
   switch (v->t) {
@@ -139,6 +145,15 @@ int urt__us_thread_join(vm *V, const us_node *at, int64_t handle);
 int urt__us_thread_kill(vm *V, const us_node *at, int64_t handle);
 int urt__us_critical(vm *V, const us_node *at, bool enter);
 
+/* Force mode as the program set it (shared by its threads): force_mode_set_damping and
+ * _gain_scaling apply to the next force_mode and to the active one. */
+typedef struct us_force_state {
+  bool active;
+  double damping, gain_scaling;
+  urt_ctrl_cmd_t cmd;   /* the active force_mode command */
+} us_force_state;
+us_force_state *urt__us_force_state(vm *V);
+
 /* Whether this thread is being unwound (killed, or the program stops): errors go unrecorded. */
 bool urt__us_unwinding(const vm *V);
 
@@ -174,8 +189,10 @@ typedef struct us_builtin {
 } us_builtin;
 
 /* Each family's table, defined next to its builtins; script_builtins.c joins them. */
-extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[];
-extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math;
+extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[],
+    urt__us_builtins_state[], urt__us_builtins_modes[];
+extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math,
+    urt__us_n_builtins_state, urt__us_n_builtins_modes;
 
 /* The builtin urt__us_builtin_find gave index k, NULL for any other k. */
 const us_builtin *urt__us_builtin_get(int k);
