@@ -162,9 +162,10 @@ static void run_main(urt_runner_t *r, const unit *u) {
   us_prog *p = NULL;
   us_err e;
 
-  // ur_rtde's rtde_control program runs natively, everything else is interpreted
+  // ur_rtde's rtde_control program runs natively (unless the VM is asked to run it as
+  // uploaded), everything else is interpreted
   urt__rc_info rc;
-  if (urt__rc_recognise(u->text, u->len, &rc)) {
+  if (!r->cfg.rtde_control_in_vm && urt__rc_recognise(u->text, u->len, &rc)) {
     run_rtde_control(r, &rc);
     urt__rc_info_free(&rc);
     return;

@@ -111,7 +111,7 @@ static inline void fake_message(void *ctx, const urt_script_msg_t *m) {
 
 static inline int fake_ik(void *ctx, const double pose[6], const double qnear[URT_NJ],
                           double q[URT_NJ]) {
-  for (int j = 0; j < 6; j++) q[j] = pose[j] + 100;  // recognisable
+  for (int j = 0; j < 6; j++) q[j] = pose[j] + 100 + qnear[j];  // recognisable, qnear honoured
   return 0;
 }
 

@@ -85,6 +85,9 @@ typedef struct urt_runner_config {
   int64_t step_budget;   /* interpreter steps allowed between two controller ticks before
                             "Runtime is too much behind" (0: default 200000)               */
   int wait_timeout_ms;   /* timeout handed to wait_tick (0: default 20)                    */
+  bool rtde_control_in_vm; /* run ur_rtde's control script as uploaded, through the VM, instead
+                            of the native copy (rtde_control.c); not yet the default: see
+                            net/urscript/README.md for what still fails that way          */
   int rt_priority;       /* > 0: SCHED_FIFO priority of the script thread (best effort): a
                             real controller runs the script in its own cycle, so a script
                             thread that wakes late would fall behind controller time     */
