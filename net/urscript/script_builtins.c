@@ -93,11 +93,8 @@ static const us_builtin kUnsupported[] = {
     {"set_tool_voltage", NULL, 0, P(NULL)},
     {"rpc_factory", NULL, 0, P(NULL)},
     {"protective_stop", NULL, 0, P(NULL)},
-    {"tool_contact", NULL, 0, P(NULL)},
-    {"get_actual_joint_positions_history", NULL, 0, P(NULL)},
     {"get_target_waypoint", NULL, 0, P(NULL)},
     {"get_target_payload_inertia", NULL, 0, P(NULL)},
-    {"rtde_set_watchdog", NULL, 0, P(NULL)},
     {"enable_external_ft_sensor", NULL, 0, P(NULL)},
     {"ft_rtde_input_enable", NULL, 0, P(NULL)},
 };
@@ -115,6 +112,7 @@ static const struct {
     {urt__us_builtins_math, &urt__us_n_builtins_math},
     {urt__us_builtins_state, &urt__us_n_builtins_state},
     {urt__us_builtins_modes, &urt__us_n_builtins_modes},
+    {urt__us_builtins_service, &urt__us_n_builtins_service},
     {kUnsupported, &kNUnsupported},
 };
 

@@ -210,7 +210,6 @@ static int b_set_payload_cog(vm *V, const us_node *n, sv *a, sv *out) {
   return b_set_payload(V, n, args, out);
 }
 
-static int b_noop(vm *V, const us_node *n, sv *a, sv *out) { return X_OK; }
 
 //---- state ----
 
@@ -298,7 +297,6 @@ const us_builtin urt__us_builtins_robot[] = {
     {"set_payload", b_set_payload, 1, P("m", "cog", "CoG")},
     {"set_payload_mass", b_set_payload_mass, 1, P("m")},
     {"set_payload_cog", b_set_payload_cog, 1, P("CoG")},
-    {"zero_ftsensor", b_noop, 0, P(NULL)},
     // state
     {"get_actual_joint_positions", b_get_actual_joint_positions, 0, P(NULL)},
     {"get_target_joint_positions", b_get_target_joint_positions, 0, P(NULL)},

@@ -82,6 +82,7 @@ typedef struct us_sched {
   int64_t next_id;
   int64_t critical;         /* handle of the thread between enter_ and exit_critical, 0 none */
   us_force_state force;
+  us_service service;
   bool stopping;            /* the program ends: every thread unwinds without recording      */
   bool halted;
   ucontext_t ctx;           /* the scheduler (the runner thread's own stack)                 */
@@ -128,6 +129,7 @@ static void resume(us_sched *S, us_thread *t) {
 }
 
 us_force_state *urt__us_force_state(vm *V) { return &V->S->force; }
+us_service *urt__us_service(vm *V) { return &V->S->service; }
 
 bool urt__us_unwinding(const vm *V) {
   return V->S && (V->S->stopping || (V->T && V->T->killed));
@@ -370,6 +372,9 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
     return -1;
   }
   for (;;) {
+    if (!p->secondary && urt__us_service_tick(&S->service, h, err) != X_OK) {
+      break;  // the watchdog fired: the program stops with its message
+    }
     run_tick(S);
     if (program_over(S)) {
       break;

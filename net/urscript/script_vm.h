@@ -154,6 +154,24 @@ typedef struct us_force_state {
 } us_force_state;
 us_force_state *urt__us_force_state(vm *V);
 
+/* What the controller records and checks every tick for the program (script_service.c). */
+#define US_HIST 2048  /* ticks of joint-position and TCP-force history (4 s at 500 Hz) */
+typedef struct us_service {
+  uint64_t n;                      /* ticks recorded */
+  double q[US_HIST][6], f[US_HIST][6];
+  double ft_bias[6];               /* zero_ftsensor */
+  bool wd_on, wd_double;           /* rtde_set_watchdog */
+  int wd_reg;
+  double wd_period, wd_last;
+  uint32_t wd_count;
+  char wd_name[64];
+} us_service;
+us_service *urt__us_service(vm *V);
+
+/* Once per tick before the threads run: record, then the watchdog (X_ERR with err set when it
+ * fired). Context: the runner thread. */
+int urt__us_service_tick(us_service *sv, const us_hooks *h, us_err *err);
+
 /* Whether this thread is being unwound (killed, or the program stops): errors go unrecorded. */
 bool urt__us_unwinding(const vm *V);
 
@@ -190,9 +208,9 @@ typedef struct us_builtin {
 
 /* Each family's table, defined next to its builtins; script_builtins.c joins them. */
 extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[],
-    urt__us_builtins_state[], urt__us_builtins_modes[];
+    urt__us_builtins_state[], urt__us_builtins_modes[], urt__us_builtins_service[];
 extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math,
-    urt__us_n_builtins_state, urt__us_n_builtins_modes;
+    urt__us_n_builtins_state, urt__us_n_builtins_modes, urt__us_n_builtins_service;
 
 /* The builtin urt__us_builtin_find gave index k, NULL for any other k. */
 const us_builtin *urt__us_builtin_get(int k);
