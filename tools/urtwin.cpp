@@ -46,7 +46,6 @@ struct Options {
   std::string lcm_prefix = "URTWIN";
   double drive_rate = 1000.0;
   int rt_priority = 0;
-  bool rtde_control_in_vm = false;
   bool lock_memory = false;
   bool local_control = false;
   std::string programs_dir = "programs";
@@ -129,9 +128,6 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 20000.0))->capture_default_str();
   app.add_option("--rt-priority", o.rt_priority, "SCHED_FIFO priority of the physics thread; the I/O and script threads get one less (0: none)")
       ->check(CLI::Range(0, 99))->capture_default_str();
-  app.add_flag("--rtde-control-in-vm", o.rtde_control_in_vm,
-               "run ur_rtde's uploaded control script through the URScript VM instead of the "
-               "native copy (experimental)");
   app.add_flag("--lock-memory", o.lock_memory, "mlockall and prefault the physics thread's stack");
   app.add_option("--programs-dir", o.programs_dir,
                  "where dashboard `load` finds programs (URScript text, .urp or .script)")
@@ -212,7 +208,6 @@ int main(int argc, char** argv) {
   ec.programs_dir = o.programs_dir.c_str();
   ec.local_control = o.local_control;
   ec.serial_number = o.serial_number.c_str();
-  ec.rtde_control_in_vm = o.rtde_control_in_vm ? 1 : 0;
   ec.rt_priority = o.rt_priority > 1 ? o.rt_priority - 1 : 0;  // just below the physics
   urt_emulator_t* emu = nullptr;
   if (urt_emulator_create(loop, &ec, &emu, err, sizeof err) != 0) {

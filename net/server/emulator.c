@@ -348,8 +348,7 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   }
   urt_script_host_t host = urt__script_host(e);
   // the script thread shares the I/O thread's priority: both feed the physics thread's rings
-  urt_runner_config_t rcfg = {.rt_priority = e->cfg.rt_priority,
-                              .rtde_control_in_vm = e->cfg.rtde_control_in_vm != 0};
+  urt_runner_config_t rcfg = {.rt_priority = e->cfg.rt_priority};
   if (urt_runner_create(&host, &rcfg, &e->runner) != 0) {
     snprintf(err, err_sz, "cannot start the URScript runner");
     urt_emulator_destroy(e);

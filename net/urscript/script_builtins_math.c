@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/urscript/script_builtins_math.c — the URScript builtins that compute from their arguments
  * alone: math on numbers, strings and list lengths, and the pose algebra (pose_trans, pose_add,
- * pose_inv) that rtde_control.c shares. Nothing here reads the controller or waits.
+ * pose_inv, pose_sub). Nothing here reads the controller or waits.
  */
 #include <math.h>
 #include <string.h>

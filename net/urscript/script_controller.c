@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/urscript/script_controller.c — how a running URScript program meets the controller:
  * controller time (snapshots, waiting for the next tick), the command queue, motions submitted
- * and waited on, and the refusal messages the interpreter shares with rtde_control.c.
+ * and waited on, and the refusal messages of motions.
  *
  * Every wait goes through urt__us_wait_tick (a yield to the scheduler, which alone calls
  * host->wait_tick) and every reading through host->snapshot; a secondary program may not wait.

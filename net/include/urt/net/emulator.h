@@ -30,7 +30,6 @@ typedef struct urt_emulator_config {
   const char *serial_number; /* digits; NULL: "20235501783"                            */
   int rt_priority;           /* > 0: SCHED_FIFO priority of the I/O and script threads
                                 (best effort)                                              */
-  int rtde_control_in_vm;    /* 1: ur_rtde's control script runs through the URScript VM    */
 } urt_emulator_config_t;
 
 /* Per-port counters (readable while running, approximately). */

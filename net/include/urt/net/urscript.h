@@ -85,9 +85,6 @@ typedef struct urt_runner_config {
   int64_t step_budget;   /* interpreter steps allowed between two controller ticks before
                             "Runtime is too much behind" (0: default 200000)               */
   int wait_timeout_ms;   /* timeout handed to wait_tick (0: default 20)                    */
-  bool rtde_control_in_vm; /* run ur_rtde's control script as uploaded, through the VM, instead
-                            of the native copy (rtde_control.c); not yet the default: see
-                            net/urscript/README.md for what still fails that way          */
   int rt_priority;       /* > 0: SCHED_FIFO priority of the script thread (best effort): a
                             real controller runs the script in its own cycle, so a script
                             thread that wakes late would fall behind controller time     */
@@ -125,14 +122,6 @@ void urt_runner_destroy(urt_runner_t *r);
 /* Parse and name-check one unit without running it. On failure msg (nullable) receives the
  * RUNTIME_EXCEPTION the runner would report. Context: any. Returns 0 or URT_EINVAL. */
 int urt_script_check(const char *text, size_t len, urt_script_msg_t *msg);
-
-/* True when text is ur_rtde's `rtde_control` program (clients.md §2.4), which the runner runs
- * natively instead of interpreting it: `def rtde_control():` first, the version tag line
- * `textmsg("RTDE Control Script Loaded (…)")`, and both register offsets readable, also in the
- * injected form `reg_offset_int = # comment\n<value>`. The offsets go to *reg_offset_int and
- * *reg_offset_float. Nullable: reg_offset_int, reg_offset_float. Context: any. */
-bool urt_rtde_control_recognise(const char *text, size_t len, int *reg_offset_int,
-                                int *reg_offset_float);
 
 #ifdef __cplusplus
 }
