@@ -386,6 +386,20 @@ def print_table(res):
               f"no contacts; euler is MuJoCo's default integrator.")
 
 
+def run_vm_bench(build, ticks):
+    """The URScript VM's cost per controller tick (tools/urt_vmbench.c): median, p99, max."""
+    exe = Path(build) / "tools" / "urt_vmbench"
+    if not exe.exists():
+        return {"status": "skipped", "reason": f"{exe} not built"}
+    try:
+        proc = subprocess.run([str(exe), str(ticks)], capture_output=True, text=True, timeout=300)
+        out = json.loads(proc.stdout)
+    except (OSError, subprocess.SubprocessError, ValueError) as e:
+        return {"status": "failed", "reason": str(e)}
+    out["status"] = "ok" if proc.returncode == 0 else "failed"
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -418,12 +432,16 @@ def main(argv=None):
     res["pinocchio"] = ({"status": "skipped"} if args.no_pinocchio
                         else bench_aba(args, build, res["urt_bench"]))
     res["ratios"] = ratios(res["urt_bench"], res["pinocchio"])
+    res["urscript_vm"] = run_vm_bench(build, 2000 if args.quick else 20000)
     res["machine"]["loadavg_end"] = list(os.getloadavg())
 
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(finite_or_null(res), indent=2, allow_nan=False) + "\n")
     print_table(res)
+    for name, c in res["urscript_vm"].get("cases", {}).items():
+        print(f"URScript VM per controller tick, {name}: median {c['median_us']:.2f} us, "
+              f"p99 {c['p99_us']:.2f} us (of a {res['urscript_vm']['period_us']} us period)")
     print(f"wrote {out}")
     # the core is what is benchmarked: its failure fails `make bench`; MuJoCo/Pinocchio never do
     return 0 if res["urt_bench"]["urt"]["status"] == "ok" else 1

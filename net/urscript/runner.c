@@ -17,7 +17,6 @@
 #include <string.h>
 #include <time.h>
 
-#include "rtde_control.h"
 #include "script.h"
 #include "urt/errors.h"
 #include "urt/thread.h"
@@ -142,33 +141,9 @@ static int poll_main(void *ctx) {
   }
 }
 
-/* ur_rtde's control script, run natively with the life cycle of any main program */
-static void run_rtde_control(urt_runner_t *r, const urt__rc_info *rc) {
-  us_err e;
-  set_state(r, URT_PROGRAM_PLAYING);
-  emit_key(r, "PROGRAM_XXX_STARTED", "rtde_control");
-  us_hooks h = {.host = &r->host, .motion_id = &r->motion_id, .step_budget = r->cfg.step_budget,
-                .wait_timeout_ms = r->cfg.wait_timeout_ms, .poll = poll_main, .poll_ctx = r};
-  if (urt__rc_run(rc, &h, &e) != 0) {
-    report(r, &e, false);
-  }
-  urt_ctrl_cmd_t halt = {.kind = URT_CTRL_HALT, .a = HALT_DECELERATION};
-  submit_retry(r, &halt);
-  set_state(r, URT_PROGRAM_STOPPED);
-  emit_key(r, "PROGRAM_XXX_STOPPED", "rtde_control");
-}
-
 static void run_main(urt_runner_t *r, const unit *u) {
   us_prog *p = NULL;
   us_err e;
-
-  // ur_rtde's rtde_control program runs natively, everything else is interpreted
-  urt__rc_info rc;
-  if (urt__rc_recognise(u->text, u->len, &rc)) {
-    run_rtde_control(r, &rc);
-    urt__rc_info_free(&rc);
-    return;
-  }
 
   // compile first: a program with a compile error never starts, nothing moves
   if (urt__us_parse(u->text, u->len, &p, &e) != 0) {
@@ -245,18 +220,6 @@ static bool is_sec_unit(const char *s, size_t len) {
   }
   char c = s[k + 3];
   return !((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_');
-}
-
-bool urt_rtde_control_recognise(const char *text, size_t len, int *reg_offset_int,
-                                int *reg_offset_float) {
-  urt__rc_info rc;
-  if (!urt__rc_recognise(text, len, &rc)) {
-    return false;
-  }
-  if (reg_offset_int) *reg_offset_int = rc.reg_offset_int;
-  if (reg_offset_float) *reg_offset_float = rc.reg_offset_float;
-  urt__rc_info_free(&rc);
-  return true;
 }
 
 int urt_runner_create(const urt_script_host_t *host, const urt_runner_config_t *cfg,

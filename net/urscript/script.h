@@ -57,8 +57,16 @@ typedef enum us_kind {
   N_INT, N_FLOAT, N_STR, N_BOOL, N_NAME, N_LIST, N_POSE, N_CALL, N_INDEX, N_UNARY, N_BINARY,
   /* statements */
   N_BLOCK, N_ASSIGN, N_GLOBAL, N_LOCAL, N_IF, N_WHILE, N_RETURN, N_HALT, N_BREAK, N_CONTINUE,
-  N_EXPR, N_DEF
+  N_EXPR, N_DEF,
+  /* threads (appended: the kinds above keep their values) */
+  N_RUN,       /* expression `run name()`: def = the thread, value = its handle        */
+  N_JOIN,      /* `join h`: a = the handle                                               */
+  N_KILL,      /* `kill h`: a = the handle                                               */
+  N_CRITICAL   /* `enter_critical` (flag 1) / `exit_critical` (flag 0)                   */
 } us_kind;
+
+/* N_DEF flag values */
+enum { US_DEF_FUNC = 0, US_DEF_SEC = 1, US_DEF_THREAD = 2 };
 
 /* An interned identifier: equal names are the same pointer. */
 typedef struct us_name {
@@ -71,7 +79,7 @@ typedef struct us_node us_node;
 struct us_node {
   uint8_t kind;       /* us_kind */
   uint8_t op;         /* N_UNARY/N_BINARY: token kind of the operator */
-  uint8_t flag;       /* N_IF: has else; N_DEF: is sec */
+  uint8_t flag;       /* N_IF: has else; N_DEF: US_DEF_*; N_CRITICAL: enter */
   uint32_t line, col;
   int n;              /* number of kids */
   us_node **kids;     /* list elements, call args, block statements, if cond/block pairs… */
@@ -85,7 +93,7 @@ struct us_node {
   const char *s;         /* N_STR (unescaped, NUL-terminated) */
   int slen;
   int builtin;           /* N_CALL: builtin index or -1 */
-  us_node *def;          /* N_CALL: user function */
+  us_node *def;          /* N_CALL: user function; N_RUN: the thread */
 };
 
 typedef struct us_prog {

@@ -83,13 +83,6 @@ static const us_builtin kUnsupported[] = {
     {"movep", NULL, 0, P(NULL)},
     {"movec", NULL, 0, P(NULL)},
     {"servol", NULL, 0, P(NULL)},
-    {"servoc", NULL, 0, P(NULL)},
-    {"force_mode", NULL, 0, P(NULL)},
-    {"end_force_mode", NULL, 0, P(NULL)},
-    {"freedrive_mode", NULL, 0, P(NULL)},
-    {"end_freedrive_mode", NULL, 0, P(NULL)},
-    {"teach_mode", NULL, 0, P(NULL)},
-    {"end_teach_mode", NULL, 0, P(NULL)},
     {"socket_open", NULL, 0, P(NULL)},
     {"socket_close", NULL, 0, P(NULL)},
     {"socket_send_string", NULL, 0, P(NULL)},
@@ -97,10 +90,13 @@ static const us_builtin kUnsupported[] = {
     {"socket_read_ascii_float", NULL, 0, P(NULL)},
     {"socket_read_binary_integer", NULL, 0, P(NULL)},
     {"popup", NULL, 0, P(NULL)},
-    {"set_gravity", NULL, 0, P(NULL)},
     {"set_tool_voltage", NULL, 0, P(NULL)},
-    {"set_target_payload", NULL, 0, P(NULL)},
     {"rpc_factory", NULL, 0, P(NULL)},
+    {"protective_stop", NULL, 0, P(NULL)},
+    {"get_target_waypoint", NULL, 0, P(NULL)},
+    {"get_target_payload_inertia", NULL, 0, P(NULL)},
+    {"enable_external_ft_sensor", NULL, 0, P(NULL)},
+    {"ft_rtde_input_enable", NULL, 0, P(NULL)},
 };
 #undef P
 
@@ -114,6 +110,9 @@ static const struct {
     {urt__us_builtins_robot, &urt__us_n_builtins_robot},
     {urt__us_builtins_io, &urt__us_n_builtins_io},
     {urt__us_builtins_math, &urt__us_n_builtins_math},
+    {urt__us_builtins_state, &urt__us_n_builtins_state},
+    {urt__us_builtins_modes, &urt__us_n_builtins_modes},
+    {urt__us_builtins_service, &urt__us_n_builtins_service},
     {kUnsupported, &kNUnsupported},
 };
 

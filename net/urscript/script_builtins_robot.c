@@ -210,7 +210,6 @@ static int b_set_payload_cog(vm *V, const us_node *n, sv *a, sv *out) {
   return b_set_payload(V, n, args, out);
 }
 
-static int b_noop(vm *V, const us_node *n, sv *a, sv *out) { return X_OK; }
 
 //---- state ----
 
@@ -248,9 +247,20 @@ static int b_is_steady(vm *V, const us_node *n, sv *a, sv *out) {
 }
 
 static int b_get_inverse_kin(vm *V, const us_node *n, sv *a, sv *out) {
-  double x[6], q[6];
-  bool is_pose;
-  if (urt__us_arg_vec6(V, n, a, 0, x, &is_pose) != X_OK || to_joints(V, n, x, true, q) != X_OK) return X_ERR;
+  // the solution nearest qnear (default: the actual joints); the active TCP (tcp= refused)
+  double x[6], qnear[6], q[6];
+  if (urt__us_arg_vec6(V, n, a, 0, x, NULL) != X_OK) return X_ERR;
+  memcpy(qnear, urt__us_snap(V)->q, sizeof qnear);
+  if (a[1].t != V_NONE && urt__us_arg_vec6(V, n, a, 1, qnear, NULL) != X_OK) return X_ERR;
+  if (a[4].t != V_NONE) {
+    return urt__us_fail(V, n, "get_inverse_kin: the tcp argument is not supported by urtwin "
+                              "(the active TCP is used)");
+  }
+  const urt_script_host_t *h = V->h->host;
+  if (!h->inverse_kinematics) return urt__us_fail(V, n, "Inverse kinematics is not available");
+  if (h->inverse_kinematics(h->ctx, x, qnear, q) != 0) {
+    return urt__us_fail(V, n, "Inverse kinematics failed: no solution for the pose");
+  }
   return vec_out(V, n, q, out);
 }
 
@@ -287,7 +297,6 @@ const us_builtin urt__us_builtins_robot[] = {
     {"set_payload", b_set_payload, 1, P("m", "cog", "CoG")},
     {"set_payload_mass", b_set_payload_mass, 1, P("m")},
     {"set_payload_cog", b_set_payload_cog, 1, P("CoG")},
-    {"zero_ftsensor", b_noop, 0, P(NULL)},
     // state
     {"get_actual_joint_positions", b_get_actual_joint_positions, 0, P(NULL)},
     {"get_target_joint_positions", b_get_target_joint_positions, 0, P(NULL)},

@@ -1,11 +1,12 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/urscript/script_controller.c — how a running URScript program meets the controller:
  * controller time (snapshots, waiting for the next tick), the command queue, motions submitted
- * and waited on, and the refusal messages the interpreter shares with rtde_control.c.
+ * and waited on, and the refusal messages of motions.
  *
- * Every wait goes through host->wait_tick and every reading through host->snapshot, so a
- * lock-stepped (virtual) clock works; a secondary program may not wait at all.
+ * Every wait goes through urt__us_wait_tick (a yield to the scheduler, which alone calls
+ * host->wait_tick) and every reading through host->snapshot; a secondary program may not wait.
  */
+#include <math.h>
 #include <stdio.h>
 
 #include "script_vm.h"
@@ -17,24 +18,14 @@ urt_snapshot_t *urt__us_snap(vm *V) {
   return &V->snap;
 }
 
-/* one wait for a newer tick; cancellation and secondary programs are checked here */
+/* the one primitive every wait goes through: yield this URScript thread until the next
+ * controller tick (script_sched.c). Cancellation is the scheduler's: a stopped program's thread
+ * wakes here with X_ERR and unwinds. A secondary program may not wait at all. */
 int urt__us_wait_tick(vm *V, const us_node *at) {
   if (V->prog->secondary) {
     return urt__us_fail(V, at, "Blocking call in a secondary program");
   }
-  uint64_t t = V->h->host->wait_tick(V->h->host->ctx, V->tick, V->h->wait_timeout_ms);
-  if (t > V->tick) {
-    V->tick = t;
-    V->steps = 0;
-  }
-  if (V->h->poll && V->h->poll(V->h->poll_ctx)) {
-    if (V->err->kind == US_ERR_NONE) {
-      V->err->kind = US_ERR_CANCEL;
-      snprintf(V->err->text, sizeof V->err->text, "stopped");
-    }
-    return X_ERR;
-  }
-  return X_OK;
+  return urt__us_yield(V);
 }
 
 int urt__us_submit(vm *V, const us_node *at, const urt_ctrl_cmd_t *cmd) {
@@ -115,10 +106,13 @@ int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *c
   return motion_check(V, at, what);
 }
 
-/* block for t seconds of controller time */
+/* block for t seconds of controller time: ceil(t / period) ticks counted from this one (a
+ * servoj with t = period takes exactly one tick), whatever the wall clock did meanwhile */
 int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, const char *what) {
-  double start = urt__us_snap(V)->time;
-  while (V->snap.time < start + t - 1e-9) {
+  double period = urt__us_snap(V)->period > 0 ? V->snap.period : 0.002;
+  double n = ceil(t / period - 1e-6);
+  uint64_t end = V->tick + (n > 0 ? (uint64_t)n : 0);
+  while (V->tick < end) {
     if (urt__us_wait_tick(V, at) != X_OK) {
       return X_ERR;
     }

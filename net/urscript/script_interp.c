@@ -26,7 +26,7 @@
 //---- errors and scratch memory ----
 
 int urt__us_fail(vm *V, const us_node *at, const char *fmt, ...) {
-  if (V->err->kind != US_ERR_NONE) {
+  if (V->err->kind != US_ERR_NONE || urt__us_unwinding(V)) {
     return X_ERR;
   }
   V->err->kind = US_ERR_RUNTIME;
@@ -53,7 +53,7 @@ void *urt__us_salloc(vm *V, const us_node *at, size_t n) {
 //---- values ----
 
 static void vfree(sv *v) {
-  if (v->t == V_STR || v->t == V_LIST) {
+  if (v->t == V_STR || is_flat(v)) {
     free((void *)(v->t == V_STR ? (void *)v->u.s : (void *)v->u.l));
   }
   memset(v, 0, sizeof *v);
@@ -68,7 +68,7 @@ static bool vdup(const sv *src, sv *dst) {
     memcpy(s, src->u.s, (size_t)src->n);
     s[src->n] = 0;
     dst->u.s = s;
-  } else if (src->t == V_LIST) {
+  } else if (is_flat(src)) {
     sv *l = malloc((size_t)(src->n ? src->n : 1) * sizeof *l);
     if (!l) return false;
     memcpy(l, src->u.l, (size_t)src->n * sizeof *l);
@@ -86,7 +86,7 @@ static bool vscratch(vm *V, const us_node *at, const sv *src, sv *dst) {
     memcpy(s, src->u.s, (size_t)src->n);
     s[src->n] = 0;
     dst->u.s = s;
-  } else if (src->t == V_LIST) {
+  } else if (is_flat(src)) {
     sv *l = urt__us_salloc(V, at, (size_t)(src->n ? src->n : 1) * sizeof *l);
     if (!l) return false;
     memcpy(l, src->u.l, (size_t)src->n * sizeof *l);
@@ -104,6 +104,19 @@ int urt__us_fmt_value(const sv *v, char *buf, size_t cap) {
     case V_POSE:
       return snprintf(buf, cap, "p[%.6g,%.6g,%.6g,%.6g,%.6g,%.6g]", v->u.p[0], v->u.p[1],
                       v->u.p[2], v->u.p[3], v->u.p[4], v->u.p[5]);
+    case V_MATRIX: {
+      // [[a,b],[c,d]]: the rows as lists
+      size_t at = (size_t)snprintf(buf, cap, "[");
+      int cols = v->cols ? v->cols : 1;
+      for (int r = 0; r * cols < v->n && at < cap; r++) {
+        sv row = {.t = V_LIST, .n = cols};
+        row.u.l = v->u.l + r * cols;
+        if (r) at += (size_t)snprintf(buf + at, cap - at, ",");
+        if (at < cap) at += (size_t)urt__us_fmt_value(&row, buf + at, cap - at);
+      }
+      if (at < cap) at += (size_t)snprintf(buf + at, cap - at, "]");
+      return (int)at;
+    }
     case V_LIST: {
       size_t at = 0;
       at += (size_t)snprintf(buf, cap, "[");
@@ -150,34 +163,39 @@ static var *add_var(vm *V, const us_node *at, frame *f, const us_name *name) {
   return v;
 }
 
+/* the frame of the running function (depth 0: the globals) */
+static frame *cur_frame(vm *V) { return V->depth == 0 ? V->globals : &V->frames[V->depth]; }
+
 /* the variable a read sees: a local, else a program variable */
 static var *lookup(vm *V, const us_name *name) {
-  var *v = find_in(&V->frames[V->depth], name);
+  var *v = find_in(cur_frame(V), name);
   if (v && v->is_global) {
     v = NULL;
   } else if (v) {
     return v;
   }
-  return find_in(&V->frames[0], name);
+  return find_in(V->globals, name);
 }
 
-/* the variable an assignment writes: `global` declared → program frame; else local */
+/* the variable an assignment writes (UR's scoping rules): `global` declared → the program
+ * frame; a local (parameter, `local`, or assigned before) → it; a free name → the program's
+ * variable if there is one, else a new local */
 static var *lookup_write(vm *V, const us_node *at, const us_name *name) {
-  frame *f = &V->frames[V->depth];
+  frame *f = cur_frame(V);
   var *v = find_in(f, name);
-  if (v && v->is_global) {
-    f = &V->frames[0];
+  if ((v && v->is_global) || (!v && V->depth > 0 && find_in(V->globals, name))) {
+    f = V->globals;
     v = find_in(f, name);
   }
   return v ? v : add_var(V, at, f, name);
 }
 
 static size_t vbytes(const sv *v) {
-  return v->t == V_STR ? (size_t)v->n + 1 : v->t == V_LIST ? (size_t)v->n * sizeof(sv) : 0;
+  return v->t == V_STR ? (size_t)v->n + 1 : is_flat(v) ? (size_t)v->n * sizeof(sv) : 0;
 }
 
 static int store(vm *V, const us_node *at, var *dst, const sv *val) {
-  size_t before = V->var_bytes - vbytes(&dst->v);
+  size_t before = *V->var_bytes - vbytes(&dst->v);
   if (before + vbytes(val) > MAX_VAR_BYTES) {
     return urt__us_fail(V, at, "Out of memory: variables hold more than %u bytes", MAX_VAR_BYTES);
   }
@@ -187,13 +205,13 @@ static int store(vm *V, const us_node *at, var *dst, const sv *val) {
   }
   vfree(&dst->v);
   dst->v = copy;
-  V->var_bytes = before + vbytes(&copy);
+  *V->var_bytes = before + vbytes(&copy);
   return X_OK;
 }
 
 static void frame_clear(vm *V, frame *f) {
   for (int k = 0; k < f->n; k++) {
-    V->var_bytes -= vbytes(&f->vars[k].v);
+    *V->var_bytes -= vbytes(&f->vars[k].v);
     vfree(&f->vars[k].v);
   }
   f->n = 0;
@@ -264,8 +282,9 @@ static bool values_equal(const sv *a, const sv *b) {
     case V_BOOL: return (a->u.i != 0) == (b->u.i != 0);
     case V_STR: return a->n == b->n && memcmp(a->u.s, b->u.s, (size_t)a->n) == 0;
     case V_POSE: return memcmp(a->u.p, b->u.p, sizeof a->u.p) == 0;
+    case V_MATRIX:
     case V_LIST:
-      if (a->n != b->n) return false;
+      if (a->n != b->n || a->cols != b->cols) return false;
       for (int k = 0; k < a->n; k++) {
         if (!values_equal(&a->u.l[k], &b->u.l[k])) return false;
       }
@@ -328,7 +347,7 @@ static int eval_list(vm *V, const us_node *n, sv *out) {
   if (!l) return X_ERR;
   for (int k = 0; k < n->n; k++) {
     if (eval(V, n->kids[k], &l[k]) != X_OK) return X_ERR;
-    if (l[k].t == V_LIST || l[k].t == V_STR || l[k].t == V_NONE) {
+    if (is_flat(&l[k]) || l[k].t == V_STR || l[k].t == V_NONE) {
       return urt__us_fail(V, n->kids[k], "Type error: a list cannot hold a %s", type_name(l[k].t));
     }
   }
@@ -365,6 +384,27 @@ static int eval_index(vm *V, const us_node *n, sv *out) {
   sv base;
   if (eval(V, n->a, &base) != X_OK || eval(V, n->b, &ix) != X_OK) return X_ERR;
   int k;
+  if (base.t == V_MATRIX) {
+    // m[i, j]: an element; m[i]: row i as a list
+    int cols = base.cols ? base.cols : 1, rows = base.n / cols;
+    if (index_of(V, n->b, &ix, rows, &k) != X_OK) return X_ERR;
+    if (n->n == 1) {
+      sv jx;
+      int j;
+      if (eval(V, n->kids[0], &jx) != X_OK || index_of(V, n->kids[0], &jx, cols, &j) != X_OK) {
+        return X_ERR;
+      }
+      *out = base.u.l[k * cols + j];
+      return X_OK;
+    }
+    out->t = V_LIST;
+    out->n = cols;
+    out->u.l = base.u.l + k * cols;  // scratch or the variable's copy: read-only here
+    return X_OK;
+  }
+  if (n->n == 1) {
+    return urt__us_fail(V, n, "Type error: %s has no [row, column] elements", type_name(base.t));
+  }
   if (base.t == V_POSE) {
     if (index_of(V, n->b, &ix, 6, &k) != X_OK) return X_ERR;
     *out = mk_float(base.u.p[k]);
@@ -542,6 +582,12 @@ static int eval(vm *V, const us_node *n, sv *out) {
     }
     case N_BINARY: rc = eval_binary(V, n, out); break;
     case N_CALL: rc = n->def ? call_user(V, n, out) : call_builtin(V, n, out); break;
+    case N_RUN: {
+      int64_t handle = 0;
+      rc = urt__us_thread_run(V, n, n->def, &handle);
+      if (rc == X_OK) *out = mk_int(handle);
+      break;
+    }
     default: rc = urt__us_fail(V, n, "internal: not an expression"); break;
   }
   V->eval_depth--;
@@ -579,7 +625,7 @@ static int exec_assign(vm *V, const us_node *n) {
   }
   if (v->v.t == V_LIST) {
     if (index_of(V, n->a, &ix, v->v.n, &k) != X_OK) return X_ERR;
-    if (val.t == V_LIST || val.t == V_STR || val.t == V_NONE) {
+    if (is_flat(&val) || val.t == V_STR || val.t == V_NONE) {
       return urt__us_fail(V, n->b, "Type error: a list cannot hold a %s", type_name(val.t));
     }
     v->v.u.l[k] = val;
@@ -601,15 +647,15 @@ static int exec_stmt(vm *V, const us_node *n) {
     case N_ASSIGN: rc = exec_assign(V, n); break;
     case N_GLOBAL:
     case N_LOCAL: {
-      frame *f = &V->frames[V->depth];
+      frame *f = cur_frame(V);
       var *v = find_in(f, n->name);
       if (n->kind == N_GLOBAL && V->depth > 0) {
         // mark the name as the program's in this frame, then write there
         if (!v && !(v = add_var(V, n, f, n->name))) { rc = X_ERR; break; }
-        V->var_bytes -= vbytes(&v->v);
+        *V->var_bytes -= vbytes(&v->v);
         vfree(&v->v);
         v->is_global = true;
-        f = &V->frames[0];
+        f = V->globals;
         v = find_in(f, n->name);
       } else if (v && v->is_global) {
         v->is_global = false;
@@ -665,6 +711,20 @@ static int exec_stmt(vm *V, const us_node *n) {
       if (rc == X_OK) rc = X_RETURN;
       break;
     case N_HALT: rc = X_HALT; break;
+    case N_JOIN:
+    case N_KILL: {
+      sv h;
+      rc = eval(V, n->a, &h);
+      if (rc != X_OK) break;
+      if (h.t != V_INT) {
+        rc = urt__us_fail(V, n->a, "Type error: %s needs a thread handle, got %s",
+                          n->kind == N_JOIN ? "join" : "kill", type_name(h.t));
+        break;
+      }
+      rc = n->kind == N_JOIN ? urt__us_thread_join(V, n, h.u.i) : urt__us_thread_kill(V, n, h.u.i);
+      break;
+    }
+    case N_CRITICAL: rc = urt__us_critical(V, n, n->flag != 0); break;
     case N_BREAK: rc = X_BREAK; break;
     case N_CONTINUE: rc = X_CONTINUE; break;
     case N_DEF: break;  // functions are resolved at compile time
@@ -683,53 +743,33 @@ static int exec_block(vm *V, const us_node *b) {
   return X_OK;
 }
 
-//---- entry ----
+//---- entry (the scheduler runs each thread's body through these) ----
 
-int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
-  memset(err, 0, sizeof *err);
+vm *urt__us_vm_new(const us_prog *p, const us_hooks *h, us_err *err, frame *globals,
+                   size_t *var_bytes) {
   vm *V = calloc(1, sizeof *V);
   if (!V) {
-    err->kind = US_ERR_RUNTIME;
-    snprintf(err->text, sizeof err->text, "Out of memory");
-    return -1;
+    return NULL;
   }
   V->scratch = malloc(SCRATCH_BYTES);
   if (!V->scratch) {
     free(V);
-    err->kind = US_ERR_RUNTIME;
-    snprintf(err->text, sizeof err->text, "Out of memory");
-    return -1;
+    return NULL;
   }
   V->prog = p;
   V->h = h;
   V->err = err;
-  V->tick = urt__us_snap(V)->tick;
+  V->globals = globals ? globals : &V->frames[0];
+  V->var_bytes = var_bytes;
+  return V;
+}
 
-  // the program body runs in frame 0; its parameters (if any) take their defaults
-  const us_node *d = p->main;
-  int rc = X_OK;
-  for (int j = 0; j < d->n && rc == X_OK; j++) {
-    sv v;
-    var *slot = add_var(V, d, &V->frames[0], d->argn[j]);
-    if (!slot) {
-      rc = X_ERR;
-    } else if (!d->kids[j]) {
-      rc = urt__us_fail(V, d, "Type error: %.*s: missing argument %.*s", d->name->len, d->name->s,
-                        d->argn[j]->len, d->argn[j]->s);
-    } else if ((rc = eval(V, d->kids[j], &v)) == X_OK) {
-      rc = store(V, d, slot, &v);
-    }
-  }
-  if (rc == X_OK) {
-    rc = exec_block(V, d->a);
-  }
-  if (rc == X_BREAK || rc == X_CONTINUE) {
-    rc = urt__us_fail(V, d, "break or continue outside a loop");
-  }
-  if (rc == X_ERR && V->halted && err->kind == US_ERR_NONE) {
-    rc = X_HALT;
-  }
+frame *urt__us_vm_globals(vm *V) { return V->globals; }
 
+void urt__us_vm_free(vm *V) {
+  if (!V) {
+    return;
+  }
   for (int k = 0; k <= MAX_CALL_DEPTH; k++) {
     frame_clear(V, &V->frames[k]);
     free(V->frames[k].vars);
@@ -737,5 +777,41 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
   vfree(&V->retval);
   free(V->scratch);
   free(V);
-  return rc == X_ERR ? -1 : 0;
+}
+
+/* X_OK (ended, returned or halted: V->halted tells a halt) or X_ERR with the error recorded */
+int urt__us_vm_body(vm *V, const us_node *d, bool is_main) {
+  int rc = X_OK;
+  if (is_main) {
+    // the program body runs in frame 0; its parameters (if any) take their defaults
+    V->depth = 0;
+    for (int j = 0; j < d->n && rc == X_OK; j++) {
+      sv v;
+      var *slot = add_var(V, d, V->globals, d->argn[j]);
+      if (!slot) {
+        rc = X_ERR;
+      } else if (!d->kids[j]) {
+        rc = urt__us_fail(V, d, "Type error: %.*s: missing argument %.*s", d->name->len,
+                          d->name->s, d->argn[j]->len, d->argn[j]->s);
+      } else if ((rc = eval(V, d->kids[j], &v)) == X_OK) {
+        rc = store(V, d, slot, &v);
+      }
+    }
+  } else {
+    // a thread's body: its own locals in frame 1, the program's variables seen through
+    V->depth = 1;
+    frame_clear(V, &V->frames[1]);
+  }
+  if (rc == X_OK) {
+    rc = exec_block(V, d->a);
+  }
+  if (rc == X_BREAK || rc == X_CONTINUE) {
+    rc = urt__us_fail(V, d, "break or continue outside a loop");
+  }
+  if (rc == X_HALT || (rc == X_ERR && V->halted && V->err->kind == US_ERR_NONE &&
+                       !urt__us_unwinding(V))) {
+    V->halted = true;
+    return X_OK;
+  }
+  return rc == X_ERR ? X_ERR : X_OK;
 }

@@ -360,6 +360,19 @@ static us_node *parse_primary(parser *P) {
       if (n) n->name = intern(P, t.s, t.len);
       advance(P);
       return n;
+    case T_RUN:
+      // `run name()`: starts a thread, the value is its handle
+      advance(P);
+      if (P->t.kind != T_NAME) {
+        syntax_error(P, &P->t);
+        return NULL;
+      }
+      n = new_node(P, N_RUN, &t);
+      if (n) n->name = intern(P, P->t.s, P->t.len);
+      advance(P);
+      expect(P, T_LP);
+      expect(P, T_RP);
+      return n;
     case T_LB:
       advance(P);
       n = new_node(P, N_LIST, &t);
@@ -367,7 +380,21 @@ static us_node *parse_primary(parser *P) {
     case T_POSE:
       advance(P);
       n = new_node(P, N_POSE, &t);
-      return n ? parse_list_tail(P, n, T_RB) : NULL;
+      if (n) parse_list_tail(P, n, T_RB);
+      if (n && !P->failed && n->n == 1) {
+        // `p[i]`: an element of a variable named p (a pose literal has six), as in ur_rtde's
+        // `def scale_pose(p, factor): p[0] = p[0] * factor`
+        us_node *base = new_node(P, N_NAME, &t);
+        if (!base) return NULL;
+        base->name = intern(P, "p", 1);
+        us_node *ix = n->kids[0];
+        n->kind = N_INDEX;
+        n->a = base;
+        n->b = ix;
+        n->n = 0;
+        n->kids = NULL;
+      }
+      return n;
     case T_LP: {
       advance(P);
       us_node *e = parse_expr(P);
@@ -419,6 +446,12 @@ static us_node *parse_postfix(parser *P) {
       }
       ix->a = e;
       ix->b = parse_expr(P);
+      if (!P->failed && accept(P, T_COMMA)) {
+        // m[i, j]: a matrix element; the column index is the one kid
+        nlist l = {0};
+        nlist_push(P, &l, parse_expr(P), NULL);
+        nlist_finish(P, &l, ix, false);
+      }
       expect(P, T_RB);
       e = ix;
     } else {
@@ -562,6 +595,10 @@ static us_node *parse_expr(parser *P) {
 
 //---- statements ----
 
+static bool name_is(const us_name *nm, const char *s) {
+  return (int)strlen(s) == nm->len && memcmp(s, nm->s, (size_t)nm->len) == 0;
+}
+
 static us_node *parse_stmt(parser *P);
 
 /* statements until one of the stop tokens (not consumed) */
@@ -594,7 +631,7 @@ static us_node *parse_block(parser *P, const tok *at, int stop1, int stop2, int 
 
 static us_node *parse_def(parser *P) {
   tok t = P->t;
-  bool sec = t.kind == T_SEC;
+  int flag = t.kind == T_SEC ? US_DEF_SEC : t.kind == T_THREAD ? US_DEF_THREAD : US_DEF_FUNC;
   advance(P);
   if (P->t.kind != T_NAME) {
     syntax_error(P, &P->t);
@@ -604,7 +641,7 @@ static us_node *parse_def(parser *P) {
   if (!d) {
     return NULL;
   }
-  d->flag = sec;
+  d->flag = (uint8_t)flag;
   d->name = intern(P, P->t.s, P->t.len);
   advance(P);
   expect(P, T_LP);
@@ -631,6 +668,9 @@ static us_node *parse_def(parser *P) {
     } while (!P->failed && accept(P, T_COMMA));
   }
   nlist_finish(P, &l, d, true);
+  if (flag == US_DEF_THREAD && d->n > 0 && !P->failed) {
+    syntax_error(P, &P->t);  // a thread takes no parameters
+  }
   expect(P, T_RP);
   expect(P, T_COLON);
   if (P->failed) {
@@ -660,7 +700,14 @@ static us_node *parse_stmt(parser *P) {
   switch (t.kind) {
     case T_DEF:
     case T_SEC:
+    case T_THREAD:
       return parse_def(P);
+    case T_JOIN:
+    case T_KILL:
+      advance(P);
+      n = new_node(P, t.kind == T_JOIN ? N_JOIN : N_KILL, &t);
+      if (n) n->a = parse_expr(P);
+      return n;
     case T_GLOBAL:
     case T_LOCAL:
       advance(P);
@@ -747,10 +794,6 @@ static us_node *parse_stmt(parser *P) {
     case T_CONTINUE:
       advance(P);
       return new_node(P, t.kind == T_HALT ? N_HALT : t.kind == T_BREAK ? N_BREAK : N_CONTINUE, &t);
-    case T_THREAD:
-    case T_RUN:
-    case T_JOIN:
-    case T_KILL:
     case T_FOR:
       // not part of the subset: a compile error, never a silent success
       if (!P->failed) {
@@ -769,7 +812,8 @@ static us_node *parse_stmt(parser *P) {
       if (P->t.kind == T_ASSIGN) {
         tok at = P->t;
         // targets: name or name[index] (digital_out[2]=True is python-urx's CB2 syntax)
-        if (!(lhs->kind == N_NAME || (lhs->kind == N_INDEX && lhs->a && lhs->a->kind == N_NAME))) {
+        if (!(lhs->kind == N_NAME ||
+              (lhs->kind == N_INDEX && lhs->n == 0 && lhs->a && lhs->a->kind == N_NAME))) {
           syntax_error(P, &at);
           return NULL;
         }
@@ -781,6 +825,13 @@ static us_node *parse_stmt(parser *P) {
         n->name = lhs->kind == N_NAME ? lhs->name : lhs->a->name;
         n->a = lhs->kind == N_INDEX ? lhs->b : NULL;
         n->b = parse_expr(P);
+        return n;
+      }
+      // enter_critical / exit_critical are statements without parentheses
+      if (lhs->kind == N_NAME && (name_is(lhs->name, "enter_critical") ||
+                                  name_is(lhs->name, "exit_critical"))) {
+        n = new_node(P, N_CRITICAL, &(tok){.line = lhs->line, .col = lhs->col});
+        if (n) n->flag = name_is(lhs->name, "enter_critical");
         return n;
       }
       n = new_node(P, N_EXPR, &(tok){.line = lhs->line, .col = lhs->col});
@@ -859,10 +910,22 @@ static void resolve(check *C, us_node *n) {
       name_error(C, n, "compile_error_name_not_found:%.*s:");
       return;
     }
+  } else if (n->kind == N_RUN) {
+    n->def = NULL;
+    for (int k = 0; k < P->n_defs; k++) {
+      if (P->defs[k]->name == n->name && P->defs[k]->flag == US_DEF_THREAD) {
+        n->def = P->defs[k];
+        break;
+      }
+    }
+    if (!n->def) {
+      name_error(C, n, "compile_error_name_not_found:%.*s:");
+      return;
+    }
   } else if (n->kind == N_CALL) {
     n->def = NULL;
     for (int k = 0; k < P->n_defs; k++) {
-      if (P->defs[k]->name == n->name) {
+      if (P->defs[k]->name == n->name && P->defs[k]->flag != US_DEF_THREAD) {
         n->def = P->defs[k];
         break;
       }
@@ -986,7 +1049,7 @@ int urt__us_parse(const char *text, size_t len, us_prog **out, us_err *err) {
     return -1;
   }
   prog->main = main;
-  prog->secondary = main->name && main->flag;
+  prog->secondary = main->name && main->flag == US_DEF_SEC;
   if (main->name) {
     snprintf(prog->name, sizeof prog->name, "%.*s", main->name->len, main->name->s);
   } else {

@@ -19,11 +19,13 @@
 
 //---- values ----
 
-enum { V_NONE = 0, V_BOOL, V_INT, V_FLOAT, V_STR, V_LIST, V_POSE };
+/* V_MATRIX: n = rows·cols floats in u.l, row-major (get_mass_matrix, get_jacobian: 6×6) */
+enum { V_NONE = 0, V_BOOL, V_INT, V_FLOAT, V_STR, V_LIST, V_POSE, V_MATRIX };
 
 typedef struct sv {
   uint8_t t;
-  int32_t n;  /* V_STR: bytes; V_LIST: elements */
+  uint16_t cols; /* V_MATRIX: columns */
+  int32_t n;  /* V_STR: bytes; V_LIST, V_MATRIX: elements */
   union {
     int64_t i;  /* V_INT, V_BOOL */
     double f;
@@ -34,8 +36,9 @@ typedef struct sv {
 } sv;
 
 static inline const char *type_name(int t) {
-  static const char *const names[] = {"none", "bool", "int", "float", "string", "list", "pose"};
-  return t >= 0 && t <= V_POSE ? names[t] : "?";
+  static const char *const names[] = {"none",   "bool", "int",  "float",
+                                       "string", "list", "pose", "matrix"};
+  return t >= 0 && t <= V_MATRIX ? names[t] : "?";
 }
 
 static inline bool is_num(const sv *v) { return v->t == V_INT || v->t == V_FLOAT; }
@@ -50,6 +53,9 @@ static inline sv mk_pose(const double p[6]) {
   memcpy(v.u.p, p, sizeof v.u.p);
   return v;
 }
+
+/* flat element storage: lists and matrices */
+static inline bool is_flat(const sv *v) { return v->t == V_LIST || v->t == V_MATRIX; }
 
 static inline bool truthy(const sv *v) {
   switch (v->t) {
@@ -81,23 +87,32 @@ typedef struct frame {
   int n, cap;
 } frame;
 
+struct us_sched;   /* the program's threads and their scheduler (script_sched.c) */
+struct us_thread;
+
+/* One URScript thread's view of the running program: builtins get the running thread's vm.
+ * The program's threads share prog, hooks, err, the globals frame and the variable budget;
+ * each has its own locals, scratch, call depth and step count. */
 typedef struct vm {
   const us_prog *prog;
   const us_hooks *h;
-  us_err *err;
+  us_err *err;           /* shared: the first error of any thread stops the program */
+  struct us_sched *S;
+  struct us_thread *T;   /* this thread */
   /* scratch stack for temporaries */
   char *scratch;
   size_t used;
-  /* frames: 0 = program body (globals) */
+  /* frames: 0 = program body (the globals, *globals: the main thread's frames[0]) */
   frame frames[MAX_CALL_DEPTH + 1];
-  int depth;        /* current frame index */
+  frame *globals;
+  int depth;        /* current frame index (a thread's body runs at 1) */
   int eval_depth;
   sv retval;        /* heap-owned value of the last `return` */
   bool halted;      /* `halt` inside a function: unwinds as X_ERR with no error */
-  size_t var_bytes; /* heap held by variables (bounded by MAX_VAR_BYTES) */
-  /* time */
+  size_t *var_bytes; /* shared: heap held by variables (bounded by MAX_VAR_BYTES) */
+  /* time: the controller tick the scheduler is running (every thread sees the same) */
   uint64_t tick;
-  int64_t steps;
+  int64_t steps;    /* steps since this thread last yielded */
   urt_snapshot_t snap;
 } vm;
 
@@ -108,6 +123,57 @@ int urt__us_fail(vm *V, const us_node *at, const char *fmt, ...);
 
 /* n bytes of scratch, 16-aligned, freed after the statement; NULL (error set) when full. */
 void *urt__us_salloc(vm *V, const us_node *at, size_t n);
+
+//---- threads (script_sched.c) ----
+
+/* The interpreter's side, called by the scheduler (script_interp.c): a thread's vm, and running
+ * the program body (is_main: frame 0, parameters take their defaults) or a thread's body. */
+vm *urt__us_vm_new(const us_prog *p, const us_hooks *h, us_err *err, frame *globals,
+                   size_t *var_bytes);
+void urt__us_vm_free(vm *V);
+frame *urt__us_vm_globals(vm *V);
+int urt__us_vm_body(vm *V, const us_node *def, bool is_main);
+
+/* Suspend the running thread until the next controller tick (the one primitive every wait goes
+ * through). X_ERR when the thread was killed or the program stopped meanwhile (nothing
+ * recorded: the unwinding is silent). */
+int urt__us_yield(vm *V);
+
+/* run name() → *handle; join h; kill h; enter_critical / exit_critical */
+int urt__us_thread_run(vm *V, const us_node *at, const us_node *def, int64_t *handle);
+int urt__us_thread_join(vm *V, const us_node *at, int64_t handle);
+int urt__us_thread_kill(vm *V, const us_node *at, int64_t handle);
+int urt__us_critical(vm *V, const us_node *at, bool enter);
+
+/* Force mode as the program set it (shared by its threads): force_mode_set_damping and
+ * _gain_scaling apply to the next force_mode and to the active one. */
+typedef struct us_force_state {
+  bool active;
+  double damping, gain_scaling;
+  urt_ctrl_cmd_t cmd;   /* the active force_mode command */
+} us_force_state;
+us_force_state *urt__us_force_state(vm *V);
+
+/* What the controller records and checks every tick for the program (script_service.c). */
+#define US_HIST 2048  /* ticks of joint-position and TCP-force history (4 s at 500 Hz) */
+typedef struct us_service {
+  uint64_t n;                      /* ticks recorded */
+  double q[US_HIST][6], f[US_HIST][6];
+  double ft_bias[6];               /* zero_ftsensor */
+  bool wd_on, wd_double;           /* rtde_set_watchdog */
+  int wd_reg;
+  double wd_period, wd_last;
+  uint32_t wd_count;
+  char wd_name[64];
+} us_service;
+us_service *urt__us_service(vm *V);
+
+/* Once per tick before the threads run: record, then the watchdog (X_ERR with err set when it
+ * fired). Context: the runner thread. */
+int urt__us_service_tick(us_service *sv, const us_hooks *h, us_err *err);
+
+/* Whether this thread is being unwound (killed, or the program stops): errors go unrecorded. */
+bool urt__us_unwinding(const vm *V);
 
 //---- the controller (script_controller.c) ----
 
@@ -123,7 +189,8 @@ int urt__us_submit(vm *V, const us_node *at, const urt_ctrl_cmd_t *cmd);
 /* Submit a motion and, if wait, block until the controller reports it done. */
 int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *cmd, bool wait);
 
-/* Block for t seconds of controller time, checking the motion is not refused if asked. */
+/* Block for t seconds of controller time (whole ticks, counted by the scheduler, not read from
+ * the clock: a late VM catches up and never lags), checking the motion is not refused if asked. */
 int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, const char *what);
 
 //---- builtins (script_builtins*.c) ----
@@ -140,8 +207,10 @@ typedef struct us_builtin {
 } us_builtin;
 
 /* Each family's table, defined next to its builtins; script_builtins.c joins them. */
-extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[];
-extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math;
+extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[],
+    urt__us_builtins_state[], urt__us_builtins_modes[], urt__us_builtins_service[];
+extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math,
+    urt__us_n_builtins_state, urt__us_n_builtins_modes, urt__us_n_builtins_service;
 
 /* The builtin urt__us_builtin_find gave index k, NULL for any other k. */
 const us_builtin *urt__us_builtin_get(int k);

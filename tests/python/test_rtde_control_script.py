@@ -1,24 +1,29 @@
 # SPDX-License-Identifier: Apache-2.0
-"""The native rtde_control recogniser on the real scripts: ur_rtde 1.6.5's ScriptClient prunes
-its control script for a controller version; RTDEControlInterface then injects the register
-offsets (the value lands at the start of the next line, clients.md §2.4) and, for movePath,
-the waypoints into exec_move_path(). The probe prints what urtwin learns from the unit."""
+"""ur_rtde's control script as it arrives, through the URScript VM: ur_rtde 1.6.5's ScriptClient
+prunes the script for a controller version; RTDEControlInterface then injects the register offsets
+(the value lands at the start of the next line, clients.md §2.4) and, for movePath, the waypoints
+into exec_move_path(). Every form compiles as uploaded, the upper register range (offset 24) runs
+its register protocol on registers 24.., and a script whose offsets were never injected is the
+syntax error a controller gives. (tests/python/test_ur_rtde_control.py drives the running script
+through ur_rtde itself.)"""
 
 import json
 import os
+import socket
 import subprocess
+import time
 
 import pytest
 
 import urtwin_ctypes as urt
+from rtde_client import RtdeClient
+from urtwin_proc import Emulator, PrimaryReader
 
 script_client = pytest.importorskip("script_client")
 
-PROBE = urt.BUILD / "tests" / "net" / "urscript" / "rtde_control_probe"
+PROBE = urt.BUILD / "tests" / "net" / "urscript" / "urscript_check_probe"
 
-# the branches each version keeps with a body (pruning leaves `dummy_op = 1` for the others)
-VERSIONS = [((3, 15), {26, 66, 67, 68, 69, 70, 71}), ((5, 19), {66, 67, 68, 69, 70, 71}),
-            ((5, 23), {66}), ((10, 11), set())]
+VERSIONS = [(3, 15), (5, 19), (5, 23), (10, 11)]
 
 PATH = ("\tsignal_async_progress(0)\n"
         "\tmovej([0.1,-1.5,1e-05,-1.57,0,0],a=1.4,v=1.05,r=0)\n"
@@ -35,36 +40,54 @@ def unit(major, minor, off_int, off_float, path=""):
     return "def rtde_control():\n" + body + "end\n"
 
 
-def probe(text):
+def check(text):
     if not os.access(PROBE, os.X_OK):
         pytest.skip(f"{PROBE} is not built")
     out = subprocess.run([str(PROBE)], input=text.encode(), capture_output=True, check=True)
     return json.loads(out.stdout)
 
 
-@pytest.mark.parametrize("version,pruned", VERSIONS, ids=lambda v: str(v))
+@pytest.mark.parametrize("version", VERSIONS, ids=str)
 @pytest.mark.parametrize("offsets", [(0, 0), (24, 24), (24, 0)])
-def test_real_script_is_recognised_with_its_offsets(version, pruned, offsets):
-    r = probe(unit(*version, *offsets))
-    assert r["recognised"]
-    assert (r["reg_offset_int"], r["reg_offset_float"]) == offsets
-    assert r["tag"] == "RTDE Control Script Loaded (14.02.2024-12:23)"
-    commands = dict(r["commands"])
-    assert {1, 2, 3, 4, 6, 9, 10, 11, 24, 33, 34, 35, 45, 46, 51, 255} <= set(commands)
-    assert {c for c, body in commands.items() if not body and c != 0} == pruned
-    assert r["path"] == [] and r["path_bad_line"] == 0
+@pytest.mark.parametrize("path", ["", PATH], ids=["no-path", "path"])
+def test_every_form_of_the_script_compiles(version, offsets, path):
+    r = check(unit(*version, *offsets, path))
+    assert r["ok"], r
 
 
-@pytest.mark.parametrize("version", [v for v, _ in VERSIONS], ids=str)
-def test_injected_path_is_read(version):
-    r = probe(unit(*version, 0, 0, PATH))
-    assert r["recognised"] and r["path_bad_line"] == 0
-    assert [(m["kind"], m["pose"]) for m in r["path"]] == [("j", False), ("l", True)]
-    assert r["path"][0]["x"] == [0.1, -1.5, 1e-05, -1.57, 0, 0]
-    assert (r["path"][1]["a"], r["path"][1]["v"], r["path"][1]["r"]) == (0.5, 0.25, 0.02)
-
-
-def test_uninjected_script_and_other_programs_are_interpreted():
+def test_uninjected_script_is_a_syntax_error():
+    # `global reg_offset_float = # comment` then `global …`: no value, as on a controller
     body = script_client.ScriptClient("127.0.0.1", 5, 23).getScript()
-    assert not probe("def rtde_control():\n" + body + "end\n")["recognised"]
-    assert not probe("def my_func():\n\twrite_output_integer_register(0 +0, 1)\nend\n")["recognised"]
+    r = check("def rtde_control():\n" + body + "end\n")
+    assert not r["ok"] and r["text"].startswith("syntax_error_on_line:")
+
+
+def test_upper_register_range_runs_on_registers_24_and_up():
+    """the script with offset 24 uploaded raw on 30003: ready on output_int_register_24 (0 stays
+    untouched), stopScript (255) on input_int_register_24 ends it"""
+    with Emulator(version="5.23") as emu:
+        c = RtdeClient(emu.host).connect()
+        c.negotiate_protocol_version(2)
+        c.setup_outputs(["output_int_register_0", "output_int_register_24", "runtime_state"],
+                        frequency=125)
+        inputs = c.setup_inputs(["input_int_register_24"])
+        c.send_inputs(inputs, {"input_int_register_24": 0})
+        c.start()
+        with PrimaryReader(emu.host, 30001) as pr:
+            pr.read()
+            with socket.create_connection((emu.host, 30003), timeout=2) as s:
+                s.sendall(unit(5, 23, 24, 24).encode())
+            t_end = time.monotonic() + 3.0
+            v = c.receive().values
+            while v["output_int_register_24"] != 1 and time.monotonic() < t_end:
+                v = c.receive().values
+            assert v["output_int_register_24"] == 1 and v["output_int_register_0"] == 0
+            assert v["runtime_state"] == 2  # PLAYING
+            c.send_inputs(inputs, {"input_int_register_24": 255})
+            msgs = pr.robot_messages(1.0)
+        c.close()
+    texts = [m["text"] for m in msgs if m["type"] == 0]
+    keys = [(m["title"], m["text"]) for m in msgs if m["type"] == 7]
+    assert "Received stop script!" in texts
+    assert ("PROGRAM_XXX_STOPPED", "rtde_control") in keys
+    assert not [m for m in msgs if m["type"] == 10]

@@ -23,7 +23,10 @@ typedef struct fake_host {
   bool refuse_motion;       /* answer every motion with a protective stop      */
   int full_for;             /* refuse this many submits (ring full)            */
   int tick_sleep_us;        /* real time per tick (0: as fast as asked)        */
+  unsigned jump_seed;       /* nonzero: each wait_tick advances 1–4 ticks (a late runner) */
+  uint64_t vm_tick;         /* the tick the runner asked to process: last after_tick + 1  */
   urt_ctrl_cmd_t cmd[FAKE_MAX];
+  uint64_t cmd_vm_tick[FAKE_MAX];  /* vm_tick when each command arrived                */
   int n_cmd;
   urt_script_msg_t msg[FAKE_MAX];
   int n_msg;
@@ -41,7 +44,10 @@ static inline bool fake_submit(void *ctx, const urt_ctrl_cmd_t *c) {
     pthread_mutex_unlock(&f->mu);
     return false;
   }
-  if (f->n_cmd < FAKE_MAX) f->cmd[f->n_cmd++] = *c;
+  if (f->n_cmd < FAKE_MAX) {
+    f->cmd_vm_tick[f->n_cmd] = f->vm_tick;
+    f->cmd[f->n_cmd++] = *c;
+  }
   if (is_motion(c->kind)) {
     if (f->refuse_motion) {
       f->s.safety_mode = URT_SAFETY_MODE_PROTECTIVE_STOP;
@@ -71,7 +77,14 @@ static inline uint64_t fake_wait_tick(void *ctx, uint64_t after, int timeout_ms)
   fake_host *f = ctx;
   if (f->tick_sleep_us > 0) usleep((useconds_t)f->tick_sleep_us);
   pthread_mutex_lock(&f->mu);
-  f->s.tick++;
+  f->vm_tick = after + 1;
+  if (f->jump_seed) {
+    f->jump_seed = f->jump_seed * 1103515245u + 12345u;
+    if (!f->jump_seed) f->jump_seed = 1;
+    if (f->s.tick <= after) f->s.tick += 1 + (uint64_t)((f->jump_seed >> 16) & 3);
+  } else {
+    f->s.tick++;
+  }
   f->s.time = (double)f->s.tick * f->s.period;
   if (f->pending_id && f->s.tick >= f->motion_end) {
     f->s.motion_done_id = f->pending_id;
@@ -98,7 +111,7 @@ static inline void fake_message(void *ctx, const urt_script_msg_t *m) {
 
 static inline int fake_ik(void *ctx, const double pose[6], const double qnear[URT_NJ],
                           double q[URT_NJ]) {
-  for (int j = 0; j < 6; j++) q[j] = pose[j] + 100;  // recognisable
+  for (int j = 0; j < 6; j++) q[j] = pose[j] + 100 + qnear[j];  // recognisable, qnear honoured
   return 0;
 }
 

@@ -203,6 +203,74 @@ static void test_interp__functions_scopes_and_control_flow(void **state) {
   assert_string_equal(R.f.msg[3].text, "3.51");
 }
 
+static void test_interp__free_variable_in_a_function_is_the_global(void **state) {
+  // UR's scoping rules: a free name is the program's variable if one exists, `local` masks it,
+  // and a name no program variable has stays local to the call
+  must_run("def prog():\n"
+           "  count = 0\n"
+           "  def bump():\n"
+           "    count = count + 1\n"
+           "    fresh = 7\n"
+           "  end\n"
+           "  def shadow():\n"
+           "    local count = 100\n"
+           "    count = count + 1\n"
+           "  end\n"
+           "  fresh = 1\n"
+           "  bump()\n"
+           "  bump()\n"
+           "  shadow()\n"
+           "  textmsg(count, fresh)\n"
+           "end\n");
+  assert_string_equal(R.f.msg[0].text, "27");
+}
+
+static void test_interp__inverse_kinematics_honours_qnear(void **state) {
+  must_run("q = get_inverse_kin(p[0.1, 0, 0, 0, 0, 0], qnear=[1, 2, 3, 4, 5, 6])\n"
+           "textmsg(q)\n"
+           "textmsg(get_inverse_kin_has_solution(p[0.1, 0, 0, 0, 0, 0]))\n");
+  assert_string_equal(R.f.msg[0].text, "[101.1,102,103,104,105,106]");  // fake IK: pose+100+qnear
+  assert_string_equal(R.f.msg[1].text, "True");
+  assert_int_equal(run_text("get_inverse_kin(p[0, 0, 0, 0, 0, 0], tcp=p[0, 0, 0.1, 0, 0, 0])\n", 0), -1);
+  assert_non_null(strstr(R.err.text, "tcp argument is not supported"));
+}
+
+static void test_interp__matrices_pose_sub_and_mode_commands(void **state) {
+  // a matrix value indexes as m[i, j] and m[i] (row); a list is not a matrix
+  assert_int_equal(run_text("l = [1, 2]\nx = l[0, 1]\n", 0), -1);
+  assert_non_null(strstr(R.err.text, "no [row, column]"));
+  setup(state);
+  must_run("d = pose_sub(p[0.3, 0.2, 0.1, 0, 0, 0.5], p[0.1, 0.1, 0.1, 0, 0, 0.2])\n"
+           "textmsg(pose_add(d, p[0.1, 0.1, 0.1, 0, 0, 0.2]))\n"
+           "force_mode_set_damping(0.1)\n"
+           "force_mode(p[0, 0, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0], [0, 0, -5, 0, 0, 0], 2, [0.1, 0.1, 0.1, 0.5, 0.5, 0.5])\n"
+           "force_mode_set_gain_scaling(0.5)\n"
+           "end_force_mode()\n"
+           "set_gravity([0, 0, 9.82])\n"
+           "set_target_payload(1.5, [0, 0, 0.05])\n");
+  assert_string_equal(R.f.msg[0].text, "p[0.3,0.2,0.1,0,0,0.5]");
+  int k = fake_find_cmd(&R.f, URT_CTRL_FORCE_MODE, 0);
+  assert_true(k >= 0);
+  assert_int_equal(R.f.cmd[k].index, 2);
+  assert_near(R.f.cmd[k].q[2], 1, 0);
+  assert_near(R.f.cmd[k].tau[2], -5, 0);
+  assert_near(R.f.cmd[k].qd[3], 0.5, 0);
+  assert_near(R.f.cmd[k].value, 0.1, 0);  // damping set before
+  assert_near(R.f.cmd[k].gain, 1.0, 0);   // UR's default gain scaling
+  int k2 = fake_find_cmd(&R.f, URT_CTRL_FORCE_MODE, k + 1);  // the active one takes the scaling
+  assert_true(k2 > k);
+  assert_near(R.f.cmd[k2].gain, 0.5, 0);
+  assert_true(fake_find_cmd(&R.f, URT_CTRL_FORCE_MODE_END, k2) > k2);
+  int g = fake_find_cmd(&R.f, URT_CTRL_SET_GRAVITY, 0);
+  assert_near(R.f.cmd[g].pose[2], -9.82, 0);  // away from the earth → the acceleration
+  int pl = fake_find_cmd(&R.f, URT_CTRL_SET_PAYLOAD, 0);
+  assert_near(R.f.cmd[pl].value, 1.5, 0);
+  assert_near(R.f.cmd[pl].pose[2], 0.05, 0);
+  setup(state);
+  assert_int_equal(run_text("set_target_payload(1, [0, 0, 0], [0.1, 0, 0, 0, 0, 0])\n", 0), -1);
+  assert_non_null(strstr(R.err.text, "inertia is not modelled"));
+}
+
 static void test_interp__halt_inside_a_function_ends_the_program_normally(void **state) {
   must_run("def stop_here():\n  halt\nend\ntextmsg(\"a\")\nx = 1 + stop_here()\ntextmsg(\"b\")\n");
   assert_int_equal(R.f.n_msg, 1);
@@ -301,6 +369,9 @@ int main(void) {
       cmocka_unit_test_setup(test_interp__io_and_settings, setup),
       cmocka_unit_test_setup(test_interp__textmsg_concatenates, setup),
       cmocka_unit_test_setup(test_interp__functions_scopes_and_control_flow, setup),
+      cmocka_unit_test_setup(test_interp__free_variable_in_a_function_is_the_global, setup),
+      cmocka_unit_test_setup(test_interp__inverse_kinematics_honours_qnear, setup),
+      cmocka_unit_test_setup(test_interp__matrices_pose_sub_and_mode_commands, setup),
       cmocka_unit_test_setup(test_interp__halt_inside_a_function_ends_the_program_normally, setup),
       cmocka_unit_test_setup(test_interp__pose_functions, setup),
       cmocka_unit_test_setup(test_interp__loop_that_never_yields_is_too_much_behind, setup),

@@ -134,8 +134,23 @@ static void test_parse__bad_character(void **state) {
   expect_error("x = 1 @ 2\n", 1, 7, "syntax_error_on_line:1:x = 1 @ 2:");
 }
 
-static void test_parse__threads_are_unsupported(void **state) {
-  expect_error("def f():\n  thread t():\n    sync()\n  end\nend\n", 2, 3, "compile_error_unsupported:thread:");
+static void test_parse__threads_parse(void **state) {
+  us_prog *p = parse_ok("def f():\n  thread t():\n    enter_critical\n    sync()\n    exit_critical\n"
+                        "  end\n  h = run t()\n  join h\n  kill h\nend\n");
+  urt__us_prog_free(p);
+}
+
+static void test_parse__thread_errors(void **state) {
+  // run names a thread, not a function; a thread takes no parameters; `for` is not URScript
+  expect_error("def f():\n  def g():\n  end\n  h = run g()\nend\n", 4, 7,
+               "compile_error_name_not_found:g:");
+  expect_error("def f():\n  thread t():\n  end\n  t()\nend\n", 4, 3,
+               "compile_error_name_not_found:t:");
+  urt_script_msg_t m;
+  const char *params = "def f():\n  thread t(x):\n  end\nend\n";
+  assert_int_equal(urt_script_check(params, strlen(params), &m), URT_EINVAL);
+  assert_non_null(strstr(m.text, "syntax_error_on_line:2:"));
+  expect_error("def f():\n  for x in y:\n  end\nend\n", 2, 3, "compile_error_unsupported:for:");
 }
 
 static void test_parse__nesting_deeper_than_64_is_refused(void **state) {
@@ -177,7 +192,8 @@ int main(void) {
       cmocka_unit_test(test_parse__missing_end),
       cmocka_unit_test(test_parse__unterminated_string),
       cmocka_unit_test(test_parse__bad_character),
-      cmocka_unit_test(test_parse__threads_are_unsupported),
+      cmocka_unit_test(test_parse__threads_parse),
+      cmocka_unit_test(test_parse__thread_errors),
       cmocka_unit_test(test_parse__nesting_deeper_than_64_is_refused),
       cmocka_unit_test(test_parse__list_longer_than_1024_is_refused),
       cmocka_unit_test(test_parse__empty_and_oversized_units_are_refused),

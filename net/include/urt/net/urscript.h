@@ -123,14 +123,6 @@ void urt_runner_destroy(urt_runner_t *r);
  * RUNTIME_EXCEPTION the runner would report. Context: any. Returns 0 or URT_EINVAL. */
 int urt_script_check(const char *text, size_t len, urt_script_msg_t *msg);
 
-/* True when text is ur_rtde's `rtde_control` program (clients.md §2.4), which the runner runs
- * natively instead of interpreting it: `def rtde_control():` first, the version tag line
- * `textmsg("RTDE Control Script Loaded (…)")`, and both register offsets readable, also in the
- * injected form `reg_offset_int = # comment\n<value>`. The offsets go to *reg_offset_int and
- * *reg_offset_float. Nullable: reg_offset_int, reg_offset_float. Context: any. */
-bool urt_rtde_control_recognise(const char *text, size_t len, int *reg_offset_int,
-                                int *reg_offset_float);
-
 #ifdef __cplusplus
 }
 #endif

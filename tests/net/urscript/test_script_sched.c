@@ -1,0 +1,278 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * tests/net/urscript/test_script_sched.c — the VM's threads and controller-clocked scheduling
+ * against the fake controller: each tick every runnable thread runs (in creation order) until
+ * it consumes time; shared globals, own locals; run/join/kill; critical sections; a thread that
+ * never yields is UR's runtime error; the per-tick command stream is the same however late the
+ * runner is. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "fake_host.h"
+#include "script.h"
+#include "test_support.h"
+
+static fake_host F;
+static urt_script_host_t H;
+static uint64_t motion_id;
+static us_err E;
+
+static int run_text(const char *text, int64_t budget) {
+  us_prog *p = NULL;
+  if (urt__us_parse(text, strlen(text), &p, &E) != 0) {
+    fail_msg("parse: %u:%u %s", E.line, E.column, E.text);
+  }
+  us_hooks h = {.host = &H, .motion_id = &motion_id, .step_budget = budget ? budget : 100000,
+                .wait_timeout_ms = 1};
+  int rc = urt__us_run(p, &h, &E);
+  urt__us_prog_free(p);
+  return rc;
+}
+
+static void must_run(const char *text) {
+  if (run_text(text, 0) != 0) {
+    fail_msg("run: %u:%u %s", E.line, E.column, E.text);
+  }
+}
+
+static int setup(void **state) {
+  fake_init(&F, &H);
+  motion_id = 0;
+  memset(&E, 0, sizeof E);
+  return 0;
+}
+
+/* two threads streaming servoj at one tick per iteration, the body joining both */
+static const char kTwoThreads[] =
+    "def two():\n"
+    "  global done = 0\n"
+    "  thread a():\n"
+    "    i = 0\n"
+    "    while i < 20:\n"
+    "      servoj([1, i, 0, 0, 0, 0], t=0.002)\n"
+    "      i = i + 1\n"
+    "    end\n"
+    "    done = done + 1\n"  /* free: the program's variable (UR's scoping rules) */
+    "  end\n"
+    "  thread b():\n"
+    "    global done\n"
+    "    i = 0\n"
+    "    while i < 10:\n"
+    "      set_standard_digital_out(i % 8, True)\n"
+    "      sleep(0.004)\n"
+    "      i = i + 1\n"
+    "    end\n"
+    "    done = done + 1\n"
+    "  end\n"
+    "  ta = run a()\n"
+    "  tb = run b()\n"
+    "  join ta\n"
+    "  join tb\n"
+    "  set_standard_digital_out(7, done == 2)\n"
+    "end\n";
+
+static void test_sched__threads_interleave_one_tick_per_wait(void **state) {
+  must_run(kTwoThreads);
+  // a: 20 servoj on 20 consecutive ticks; b: an output every 2 ticks; both start in tick 0
+  int na = 0, nb = 0;
+  uint64_t first_a = 0, last_a = 0;
+  for (int k = 0; k < F.n_cmd; k++) {
+    if (F.cmd[k].kind == URT_CTRL_SERVOJ) {
+      if (na == 0) first_a = F.cmd_vm_tick[k];
+      assert_int_equal(F.cmd_vm_tick[k], first_a + (uint64_t)na);
+      assert_near(F.cmd[k].q[1], na, 0);
+      last_a = F.cmd_vm_tick[k];
+      na++;
+    } else if (F.cmd[k].kind == URT_CTRL_SET_DIGITAL_OUT && nb < 10) {
+      assert_int_equal(F.cmd_vm_tick[k], first_a + 2u * (uint64_t)nb);
+      nb++;
+    }
+  }
+  assert_int_equal(na, 20);
+  assert_int_equal(nb, 10);
+  assert_int_equal(last_a - first_a, 19);
+  // in a tick where both act, a (created first) comes first
+  int ka = fake_find_cmd(&F, URT_CTRL_SERVOJ, 0), kb = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, 0);
+  assert_true(ka < kb);
+  // both threads' `done` is the program's variable, each thread's `i` its own
+  const urt_ctrl_cmd_t *last = &F.cmd[F.n_cmd - 1];
+  assert_int_equal(last->kind, URT_CTRL_SET_DIGITAL_OUT);
+  assert_int_equal(last->index, 7);
+  assert_int_equal(last->value, 1);
+}
+
+static uint64_t stream_hash(const fake_host *f) {
+  uint64_t h = 1469598103934665603ull;
+  for (int k = 0; k < f->n_cmd; k++) {
+    const urt_ctrl_cmd_t *c = &f->cmd[k];
+    double q[7] = {c->q[0], c->q[1], c->q[2], c->value, c->t, (double)c->index, (double)c->kind};
+    uint64_t tick = f->cmd_vm_tick[k];
+    const unsigned char *b = (const unsigned char *)q;
+    for (size_t j = 0; j < sizeof q; j++) h = (h ^ b[j]) * 1099511628211ull;
+    b = (const unsigned char *)&tick;
+    for (size_t j = 0; j < sizeof tick; j++) h = (h ^ b[j]) * 1099511628211ull;
+  }
+  return h;
+}
+
+static void test_sched__same_stream_however_late_the_runner_is(void **state) {
+  must_run(kTwoThreads);
+  uint64_t on_time = stream_hash(&F);
+  int n_on_time = F.n_cmd;
+  uint64_t ticks_on_time = F.s.tick;
+  // again, the controller 1–4 ticks ahead at every wait and the runner descheduled meanwhile
+  setup(state);
+  F.jump_seed = 12345;
+  F.tick_sleep_us = 50;
+  must_run(kTwoThreads);
+  assert_int_equal(F.n_cmd, n_on_time);
+  assert_true(stream_hash(&F) == on_time);
+  assert_true(F.s.tick > ticks_on_time);  // the clock really ran ahead of the runner
+}
+
+static void test_sched__runaway_thread_is_too_much_behind_and_stops_the_program(void **state) {
+  int rc = run_text("def p():\n"
+                    "  thread spin():\n"
+                    "    x = 0\n"
+                    "    while True:\n"
+                    "      x = x + 1\n"
+                    "    end\n"
+                    "  end\n"
+                    "  run spin()\n"
+                    "  while True:\n"
+                    "    sync()\n"
+                    "  end\n"
+                    "end\n",
+                    1000);
+  assert_int_equal(rc, -1);
+  assert_int_equal(E.kind, US_ERR_RUNTIME);
+  assert_string_equal(E.text, "Runtime is too much behind");
+  assert_true(E.line >= 4 && E.line <= 5);  // inside spin's loop
+}
+
+static void test_sched__kill_stops_a_thread_and_join_returns(void **state) {
+  must_run("def p():\n"
+           "  thread t():\n"
+           "    while True:\n"
+           "      servoj([0, 0, 0, 0, 0, 0], t=0.002)\n"
+           "    end\n"
+           "  end\n"
+           "  h = run t()\n"
+           "  sleep(0.01)\n"
+           "  kill h\n"
+           "  join h\n"
+           "  set_standard_digital_out(1, True)\n"
+           "  sleep(0.01)\n"
+           "end\n");
+  int last_servo = -1, out = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, 0);
+  int n_servo = 0;
+  for (int k = 0; k < F.n_cmd; k++) {
+    if (F.cmd[k].kind == URT_CTRL_SERVOJ) {
+      last_servo = k;
+      n_servo++;
+    }
+  }
+  assert_true(out > last_servo);
+  // the thread ran in the 5 ticks of sleep(0.01) and the tick of the kill (it runs after the
+  // body in a tick, and the body killed it before its turn)
+  assert_int_equal(n_servo, 5);
+}
+
+static void test_sched__critical_section_holds_the_other_threads(void **state) {
+  must_run("def p():\n"
+           "  thread t():\n"
+           "    while True:\n"
+           "      set_standard_digital_out(0, True)\n"
+           "      sync()\n"
+           "    end\n"
+           "  end\n"
+           "  h = run t()\n"
+           "  sync()\n"
+           "  enter_critical\n"
+           "  servoj([1, 0, 0, 0, 0, 0], t=0.002)\n"
+           "  servoj([2, 0, 0, 0, 0, 0], t=0.002)\n"
+           "  servoj([3, 0, 0, 0, 0, 0], t=0.002)\n"
+           "  exit_critical\n"
+           "  sync()\n"
+           "  kill h\n"
+           "end\n");
+  int first = fake_find_cmd(&F, URT_CTRL_SERVOJ, 0);
+  assert_true(first > 0);
+  for (int k = first; k < first + 3; k++) {
+    assert_int_equal(F.cmd[k].kind, URT_CTRL_SERVOJ);  // nothing of t in between
+  }
+  assert_int_equal(F.cmd_vm_tick[first + 2] - F.cmd_vm_tick[first], 2);
+  assert_true(fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, first) > first + 2);
+}
+
+static void test_sched__halt_in_a_thread_ends_the_program(void **state) {
+  must_run("def p():\n"
+           "  thread t():\n"
+           "    sleep(0.004)\n"
+           "    halt\n"
+           "  end\n"
+           "  run t()\n"
+           "  while True:\n"
+           "    servoj([0, 0, 0, 0, 0, 0], t=0.002)\n"
+           "  end\n"
+           "end\n");
+  assert_int_equal(E.kind, US_ERR_NONE);
+  assert_true(F.n_cmd >= 2 && F.n_cmd <= 4);
+}
+
+static void test_sched__error_in_a_thread_stops_every_thread(void **state) {
+  int rc = run_text("def p():\n"
+                    "  thread t():\n"
+                    "    sync()\n"
+                    "    x = [1, 2][5]\n"
+                    "  end\n"
+                    "  run t()\n"
+                    "  while True:\n"
+                    "    sync()\n"
+                    "  end\n"
+                    "end\n",
+                    0);
+  assert_int_equal(rc, -1);
+  assert_int_equal(E.line, 4);
+  assert_non_null(strstr(E.text, "Index out of bounds"));
+}
+
+static void test_sched__recursion_limit_in_a_thread(void **state) {
+  int rc = run_text("def p():\n"
+                    "  def f(n):\n"
+                    "    return f(n + 1)\n"
+                    "  end\n"
+                    "  thread t():\n"
+                    "    f(0)\n"
+                    "  end\n"
+                    "  join run t()\n"
+                    "end\n",
+                    0);
+  assert_int_equal(rc, -1);
+  assert_non_null(strstr(E.text, "Stack overflow"));
+}
+
+static void test_sched__secondary_program_may_not_start_threads(void **state) {
+  us_prog *p = NULL;
+  const char *text = "sec s():\n  thread t():\n  end\n  run t()\nend\n";
+  assert_int_equal(urt__us_parse(text, strlen(text), &p, &E), 0);
+  us_hooks h = {.host = &H, .motion_id = &motion_id, .step_budget = 1000, .wait_timeout_ms = 1};
+  assert_int_equal(urt__us_run(p, &h, &E), -1);
+  assert_non_null(strstr(E.text, "secondary"));
+  urt__us_prog_free(p);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test_setup(test_sched__threads_interleave_one_tick_per_wait, setup),
+      cmocka_unit_test_setup(test_sched__same_stream_however_late_the_runner_is, setup),
+      cmocka_unit_test_setup(test_sched__runaway_thread_is_too_much_behind_and_stops_the_program, setup),
+      cmocka_unit_test_setup(test_sched__kill_stops_a_thread_and_join_returns, setup),
+      cmocka_unit_test_setup(test_sched__critical_section_holds_the_other_threads, setup),
+      cmocka_unit_test_setup(test_sched__halt_in_a_thread_ends_the_program, setup),
+      cmocka_unit_test_setup(test_sched__error_in_a_thread_stops_every_thread, setup),
+      cmocka_unit_test_setup(test_sched__recursion_limit_in_a_thread, setup),
+      cmocka_unit_test_setup(test_sched__secondary_program_may_not_start_threads, setup),
+  };
+  return cmocka_run_group_tests_name("net/urscript/script_sched", tests, NULL, NULL);
+}

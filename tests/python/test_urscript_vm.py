@@ -1,0 +1,112 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The URScript VM in a real urtwin process: threads of one program run per controller tick, and a
+thread that loops without yielding gets UR's runtime error, the program stops, and every port
+keeps serving (net/urscript/script_sched.c)."""
+
+import socket
+import time
+
+from urtwin_proc import Emulator, PrimaryReader, RtReader
+
+RUNAWAY = """def runaway():
+  thread spin():
+    x = 0
+    while True:
+      x = x + 1
+    end
+  end
+  textmsg("started")
+  run spin()
+  while True:
+    sync()
+  end
+end
+"""
+
+TWO_THREADS = """def two():
+  global n = 0
+  thread a():
+    i = 0
+    while i < 50:
+      set_standard_digital_out(0, i % 2 == 0)
+      sync()
+      i = i + 1
+    end
+    n = n + 1
+  end
+  thread b():
+    i = 0
+    while i < 25:
+      set_standard_digital_out(1, i % 2 == 0)
+      sleep(0.004)
+      i = i + 1
+    end
+    n = n + 1
+  end
+  ta = run a()
+  tb = run b()
+  join ta
+  join tb
+  textmsg("joined ", n)
+end
+"""
+
+
+def serves_every_port(host):
+    """each port answers as a controller does: version on 30001/30002, a packet on 30003, the
+    dashboard's reply, and RTDE's protocol-version reply on 30004"""
+    for port in (30001, 30002):
+        with PrimaryReader(host, port) as pr:
+            assert pr.read()[0] == 20
+    with RtReader(host) as rt:
+        rt.read_decoded()
+    with socket.create_connection((host, 29999), timeout=2) as s:
+        s.recv(1024)  # greeting
+        s.sendall(b"robotmode\n")
+        assert s.recv(1024).startswith(b"Robotmode:")
+    with socket.create_connection((host, 30004), timeout=2) as s:
+        s.sendall(bytes([0, 5, ord("V"), 0, 2]))  # REQUEST_PROTOCOL_VERSION 2
+        reply = s.recv(64)
+        assert reply[2] == ord("V") and reply[3] == 1
+    return True
+
+
+def test_runaway_thread_is_too_much_behind_and_the_emulator_keeps_serving():
+    with Emulator() as emu:
+        with PrimaryReader(emu.host, 30001) as pr:
+            pr.read()
+            emu.send_script(RUNAWAY, port=30001)
+            msgs = pr.robot_messages(1.5)
+        texts = [m["text"] for m in msgs if m["type"] == 0]
+        exc = [m for m in msgs if m["type"] == 10]
+        keys = [(m["title"], m["text"]) for m in msgs if m["type"] == 7]
+        print(f"\nruntime exception: {exc}, keys {keys}")
+        assert any("started" in t for t in texts)
+        assert len(exc) == 1 and exc[0]["text"] == "Runtime is too much behind"
+        assert exc[0]["line"] in (4, 5)  # inside spin's loop
+        assert ("PROGRAM_XXX_STOPPED", "runaway") in keys
+        with RtReader(emu.host) as rt:
+            assert rt.read_decoded()["program_state"] == 1  # STOPPED
+        assert serves_every_port(emu.host)
+        # and the next program runs
+        with PrimaryReader(emu.host, 30001) as pr:
+            pr.read()
+            emu.send_script('def after():\n  textmsg("next one")\nend\n', port=30001)
+            assert any("next one" in m.get("text", "") for m in pr.robot_messages(1.0))
+        assert emu.alive()
+
+
+def test_two_threads_run_side_by_side_and_join():
+    with Emulator() as emu:
+        with PrimaryReader(emu.host, 30001) as pr:
+            pr.read()
+            t0 = time.monotonic()
+            emu.send_script(TWO_THREADS, port=30001)
+            msgs = pr.robot_messages(1.0)
+        texts = [m["text"] for m in msgs if m["type"] == 0]
+        keys = [(m["title"], m["text"]) for m in msgs if m["type"] == 7]
+        print(f"\ntexts {texts}, keys {keys}, {time.monotonic() - t0:.2f} s")
+        # both threads ran their 50 ticks side by side (100 ms), n is the program's variable
+        assert "joined 2" in texts
+        assert ("PROGRAM_XXX_STOPPED", "two") in keys
+        assert not [m for m in msgs if m["type"] == 10]
