@@ -108,8 +108,13 @@ int urt__us_builtin_find(const char *name, int len);
 
 //---- interpreter ----
 
+struct us_sockets;
+
 typedef struct us_hooks {
   const urt_script_host_t *host;
+  /* the program's sockets (script_socket.h), owned by the runner, which closes them when the
+   * program ends. Nullable: socket builtins are runtime errors (secondary programs). */
+  struct us_sockets *sockets;
   uint64_t *motion_id;     /* last motion id used by this runner (incremented per motion) */
   int64_t step_budget;     /* steps between ticks */
   int wait_timeout_ms;

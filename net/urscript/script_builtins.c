@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/urscript/script_builtins.c — the URScript builtin registry: every family's table
- * (script_builtins_robot.c, _io.c, _math.c) behind one index the parser resolves names to,
+ * (script_builtins_robot.c, _io.c, _math.c, _socket.c) behind one index the parser resolves names to,
  * the names urtwin knows but does not emulate, and the argument readers every builtin uses.
  */
 #include <math.h>
@@ -90,12 +90,6 @@ static const us_builtin kUnsupported[] = {
     {"end_freedrive_mode", NULL, 0, P(NULL)},
     {"teach_mode", NULL, 0, P(NULL)},
     {"end_teach_mode", NULL, 0, P(NULL)},
-    {"socket_open", NULL, 0, P(NULL)},
-    {"socket_close", NULL, 0, P(NULL)},
-    {"socket_send_string", NULL, 0, P(NULL)},
-    {"socket_send_line", NULL, 0, P(NULL)},
-    {"socket_read_ascii_float", NULL, 0, P(NULL)},
-    {"socket_read_binary_integer", NULL, 0, P(NULL)},
     {"popup", NULL, 0, P(NULL)},
     {"set_gravity", NULL, 0, P(NULL)},
     {"set_tool_voltage", NULL, 0, P(NULL)},
@@ -114,6 +108,7 @@ static const struct {
     {urt__us_builtins_robot, &urt__us_n_builtins_robot},
     {urt__us_builtins_io, &urt__us_n_builtins_io},
     {urt__us_builtins_math, &urt__us_n_builtins_math},
+    {urt__us_builtins_socket, &urt__us_n_builtins_socket},
     {kUnsupported, &kNUnsupported},
 };
 

@@ -140,8 +140,10 @@ typedef struct us_builtin {
 } us_builtin;
 
 /* Each family's table, defined next to its builtins; script_builtins.c joins them. */
-extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[];
-extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math;
+extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[],
+    urt__us_builtins_socket[];
+extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math,
+    urt__us_n_builtins_socket;
 
 /* The builtin urt__us_builtin_find gave index k, NULL for any other k. */
 const us_builtin *urt__us_builtin_get(int k);

@@ -88,13 +88,18 @@ typedef struct urt_runner_config {
   int rt_priority;       /* > 0: SCHED_FIFO priority of the script thread (best effort): a
                             real controller runs the script in its own cycle, so a script
                             thread that wakes late would fall behind controller time     */
+  /* Hosts besides loopback (127.0.0.0/8, ::1, "localhost") that socket_open may dial, as
+   * written in the script (--script-allow-host); at most 16, copied. Nullable when 0. */
+  const char *const *allow_hosts;
+  int n_allow_hosts;
 } urt_runner_config_t;
 
 typedef struct urt_runner urt_runner_t;
 
 /* Create the runner and start its thread. The host is copied. Nullable: cfg.
  * Context: non-RT (allocates, starts a thread). Returns 0, URT_EINVAL (missing host
- * function) or URT_EIO (thread creation failed); *out untouched on failure. */
+ * function, more than 16 allowed hosts or one longer than 255 bytes) or URT_EIO (thread
+ * creation failed); *out untouched on failure. */
 int urt_runner_create(const urt_script_host_t *host, const urt_runner_config_t *cfg,
                       urt_runner_t **out);
 
