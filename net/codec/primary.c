@@ -424,6 +424,26 @@ int urt_primary_encode_key(uint64_t timestamp_us, int source, int32_t code, int3
   return end_message(&w, at);
 }
 
+int urt_primary_encode_popup(uint64_t timestamp_us, int source, uint32_t request_id,
+                             uint32_t requested_type, bool warning, bool error, bool blocking,
+                             const char *title, const char *text, uint8_t *buf, size_t cap) {
+  size_t title_len = title ? strlen(title) : 0;
+  if (title_len > 255) {
+    return URT_EINVAL;
+  }
+  urt_wbuf_t w = urt_wbuf_make(buf, cap);
+  uint8_t *at = begin_message(&w, timestamp_us, source, URT_PRIMARY_MSG_POPUP);
+  urt_be_put_u32(&w, request_id);
+  urt_be_put_u32(&w, requested_type);
+  urt_be_put_u8(&w, warning ? 1 : 0);
+  urt_be_put_u8(&w, error ? 1 : 0);
+  urt_be_put_u8(&w, blocking ? 1 : 0);
+  urt_be_put_u8(&w, (uint8_t)title_len);
+  put_text(&w, title);
+  put_text(&w, text);
+  return end_message(&w, at);
+}
+
 int urt_primary_encode_runtime_exception(uint64_t timestamp_us, int source, uint32_t line,
                                          uint32_t column, const char *text, uint8_t *buf,
                                          size_t cap) {

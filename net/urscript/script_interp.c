@@ -383,7 +383,7 @@ static int call_builtin(vm *V, const us_node *n, sv *out) {
   const us_builtin *b = urt__us_builtin_get(n->builtin);
   if (!b) return urt__us_fail(V, n, "internal: unresolved call");
   if (!b->fn) {
-    // known URScript, not emulated: a runtime error before anything of the call happens
+    // known URScript, not emulated: the name check refuses it at compile time; a guard only
     return urt__us_fail(V, n, "%.*s is not supported by urtwin", n->name->len, n->name->s);
   }
   int np = 0;

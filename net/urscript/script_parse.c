@@ -873,6 +873,12 @@ static void resolve(check *C, us_node *n) {
         name_error(C, n, "compile_error_name_not_found:%.*s:");
         return;
       }
+      // a function the controller has and urtwin does not: refused before anything runs,
+      // never a no-op or an error half-way through a program that has already moved
+      if (!urt__us_builtin_supported(n->builtin)) {
+        name_error(C, n, "compile_error_unsupported:%.*s:");
+        return;
+      }
     }
   } else if (n->kind == N_ASSIGN && n->a && !C->bound[n->name->id] && !is_constant(n->name)) {
     name_error(C, n, "compile_error_name_not_found:%.*s:");

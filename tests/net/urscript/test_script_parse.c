@@ -110,6 +110,13 @@ static void test_parse__unknown_function_is_a_compile_error_at_its_position(void
                "compile_error_name_not_found:calldoesntexist:");
 }
 
+static void test_parse__unsupported_function_is_a_compile_error_naming_it(void **state) {
+  // a controller function urtwin does not run: refused before the program starts, even in a
+  // branch that would never run
+  expect_error("def f():\n  if False:\n    teach_mode()\n  end\nend\n", 3, 5,
+               "compile_error_unsupported:teach_mode:");
+}
+
 static void test_parse__unknown_variable_is_a_compile_error(void **state) {
   expect_error("def f():\n  x = 1\n  y = x + zz\nend\n", 3, 11, "compile_error_name_not_found:zz:");
 }
@@ -172,6 +179,7 @@ int main(void) {
       cmocka_unit_test(test_parse__sec_program_is_secondary),
       cmocka_unit_test(test_parse__numbers),
       cmocka_unit_test(test_parse__unknown_function_is_a_compile_error_at_its_position),
+      cmocka_unit_test(test_parse__unsupported_function_is_a_compile_error_naming_it),
       cmocka_unit_test(test_parse__unknown_variable_is_a_compile_error),
       cmocka_unit_test(test_parse__syntax_error_names_the_line),
       cmocka_unit_test(test_parse__missing_end),

@@ -37,6 +37,7 @@ extern "C" {
 /* What the runner tells the primary interface (protocols.md §4.5 ROBOT_MESSAGE). */
 typedef enum urt_script_msg_kind {
   URT_SCRIPT_MSG_TEXT = 0,               /* robot_message_type 0: text                   */
+  URT_SCRIPT_MSG_POPUP = 2,              /* robot_message_type 2: title, text, flags       */
   URT_SCRIPT_MSG_KEY = 7,                /* robot_message_type 7: title + text            */
   URT_SCRIPT_MSG_RUNTIME_EXCEPTION = 10  /* robot_message_type 10: line, column, text      */
 } urt_script_msg_kind_t;
@@ -46,11 +47,12 @@ typedef struct urt_script_msg {
   int32_t kind;          /* urt_script_msg_kind_t                                         */
   int32_t code;          /* KEY: code (0)                                                  */
   int32_t argument;      /* KEY: argument (0)                                              */
+  uint8_t warning, error, blocking;  /* POPUP: its flags                                    */
   uint32_t line;         /* RUNTIME_EXCEPTION: 1-based line of the offending token          */
   uint32_t column;       /* RUNTIME_EXCEPTION: 1-based column of the offending token        */
   double time;           /* controller time when it was emitted [s]                        */
   char title[64];        /* KEY: "PROGRAM_XXX_STARTED", "PROGRAM_XXX_STOPPED",
-                            "SECONDARY_PROGRAM_EXCEPTION_XXX"                               */
+                            "SECONDARY_PROGRAM_EXCEPTION_XXX"; POPUP: its title             */
   char text[1024];       /* TEXT: the message; KEY: program name or error; EXCEPTION: text  */
 } urt_script_msg_t;
 
