@@ -196,7 +196,7 @@ static void put_tool_data(urt_wbuf_t *w, const urt_snapshot_t *s) {
   urt_be_put_f64(w, 0.0);
   urt_be_put_f64(w, 0.0);
   urt_be_put_f32(w, 0.0f);  /* tool voltage 48 V */
-  urt_be_put_u8(w, 0);      /* tool output voltage */
+  urt_be_put_u8(w, (uint8_t)s->tool_voltage);  /* tool output voltage (set_tool_voltage) */
   urt_be_put_f32(w, 0.0f);  /* tool current */
   urt_be_put_f32(w, 0.0f);  /* tool temperature */
   urt_be_put_u8(w, (uint8_t)s->joint_mode[URT_NJ - 1]);  /* tool mode follows wrist 3 */

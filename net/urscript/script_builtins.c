@@ -93,7 +93,6 @@ static const us_builtin kUnsupported[] = {
     {"end_freedrive_mode", NULL, 0, P(NULL)},
     {"teach_mode", NULL, 0, P(NULL)},
     {"end_teach_mode", NULL, 0, P(NULL)},
-    {"set_tool_voltage", NULL, 0, P(NULL)},
     {"rpc_factory", NULL, 0, P(NULL)},
     // item 1 of issue 9 (the controller's motions and modes) brings these
     {"optimovej", NULL, 0, P(NULL)},

@@ -190,6 +190,16 @@ static int b_set_gravity(vm *V, const us_node *n, sv *a, sv *out) {
   return urt__us_submit(V, n, &c);
 }
 
+/* set_tool_voltage(voltage): 0, 12 or 24 V at the tool connector (RTDE tool_output_voltage) */
+static int b_set_tool_voltage(vm *V, const us_node *n, sv *a, sv *out) {
+  urt_ctrl_cmd_t c = {.kind = URT_CTRL_SET_TOOL_VOLTAGE};
+  if (urt__us_arg_num(V, n, a, 0, 0, &c.value) != X_OK) return X_ERR;
+  if (c.value != 0 && c.value != 12 && c.value != 24) {
+    return urt__us_fail(V, n, "set_tool_voltage: %g V is not 0, 12 or 24", c.value);
+  }
+  return urt__us_submit(V, n, &c);
+}
+
 /* three numbers from a list or a pose's position */
 static int vec3_arg(vm *V, const us_node *n, const sv *a, int k, double x[3]) {
   if (a[k].t == V_POSE) {
@@ -269,6 +279,7 @@ const us_builtin urt__us_builtins_state[] = {
     {"set_gravity", b_set_gravity, 1, P("d")},
     {"set_target_payload", b_set_target_payload, 2, P("m", "cog", "inertia", "transition_time")},
     {"popup", b_popup, 1, P("s", "title", "warning", "error", "blocking")},
+    {"set_tool_voltage", b_set_tool_voltage, 1, P("voltage")},
 };
 #undef P
 

@@ -51,7 +51,6 @@ PENDING = {
     "get_target_waypoint": "needs the active motion's target (motions)",
     "get_freedrive_status": "UR's singularity-distance metric (0/1/2) is not known to urtwin",
     "protective_stop": "issue 9 item 8 (C209 protective stop)",
-    "set_tool_voltage": "the controller keeps no tool voltage (RTDE tool_output_voltage is MISSING)",
     # urtwin has no external force/torque sensor input
     "ft_rtde_input_enable": "no external F/T sensor input in urtwin",
     "enable_external_ft_sensor": "no external F/T sensor input in urtwin",

@@ -163,6 +163,11 @@ static void test_state__gravity_and_target_payload_commands(void **state) {
   assert_int_equal(R.f.cmd[1].kind, URT_CTRL_SET_PAYLOAD);
   assert_true(R.f.cmd[1].value == 1.5 && R.f.cmd[1].pose[1] == 0.01 && R.f.cmd[1].pose[2] == 0.05);
   assert_true(R.f.cmd[1].tau[0] == 0.01 && R.f.cmd[1].tau[2] == 0.03);
+  sr_must(&R, "set_tool_voltage(12)\n");
+  assert_int_equal(R.f.cmd[2].kind, URT_CTRL_SET_TOOL_VOLTAGE);
+  assert_true(R.f.cmd[2].value == 12);
+  assert_int_not_equal(sr_run(&R, "set_tool_voltage(5)\n"), 0);
+  memset(&R.err, 0, sizeof R.err);
   assert_int_not_equal(sr_run(&R, "set_target_payload(-1, [0, 0, 0])\n"), 0);
   memset(&R.err, 0, sizeof R.err);
   assert_int_not_equal(sr_run(&R, "set_gravity([0, 0])\n"), 0);
