@@ -57,6 +57,15 @@ static int b_get_tcp_force(vm *V, const us_node *n, sv *a, sv *out) { return vec
 static int b_get_target_payload(vm *V, const us_node *n, sv *a, sv *out) { *out = mk_float(urt__us_snap(V)->payload_mass); return X_OK; }
 static int b_get_target_payload_cog(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->payload_cog, 3, out); }
 
+/* force(): the size of the force part of the TCP wrench (UR: the norm of Fx, Fy, Fz) */
+static int b_force(vm *V, const us_node *n, sv *a, sv *out) {
+  const double *f = urt__us_snap(V)->tcp_force;
+  *out = mk_float(sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]));
+  return X_OK;
+}
+
+static int b_get_tool_accelerometer_reading(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->tool_accel, 3, out); }
+
 static int b_get_joint_temp(vm *V, const us_node *n, sv *a, sv *out) {
   int64_t j;
   if (urt__us_arg_int(V, n, a, 0, &j) != X_OK) return X_ERR;
@@ -268,6 +277,8 @@ const us_builtin urt__us_builtins_state[] = {
     {"get_joint_torques", b_get_joint_torques, 0, P(NULL)},
     {"get_tcp_force", b_get_tcp_force, 0, P(NULL)},
     {"get_joint_temp", b_get_joint_temp, 1, P("j")},
+    {"force", b_force, 0, P(NULL)},
+    {"get_tool_accelerometer_reading", b_get_tool_accelerometer_reading, 0, P(NULL)},
     {"get_target_payload", b_get_target_payload, 0, P(NULL)},
     {"get_target_payload_cog", b_get_target_payload_cog, 0, P(NULL)},
     {"get_actual_tool_flange_pose", b_get_actual_tool_flange_pose, 0, P(NULL)},

@@ -145,6 +145,20 @@ static void test_state__flange_pose_and_getters(void **state) {
   for (int k = 0; k < 9; k++) assert_string_equal(R.f.msg[k].text, want[k]);
 }
 
+static void test_state__inputs_force_accelerometer(void **state) {
+  R.f.s.digital_in = 1u << 9 | 1u << 17;  // configurable input 1, tool input 1
+  memcpy(R.f.s.tcp_force, (double[6]){3, 4, 12, 100, 100, 100}, sizeof R.f.s.tcp_force);
+  memcpy(R.f.s.tool_accel, (double[3]){0.1, -0.2, 9.81}, sizeof R.f.s.tool_accel);
+  sr_must(&R, "textmsg(get_configurable_digital_in(1), get_configurable_digital_in(0))\n"
+              "textmsg(get_tool_digital_in(1), get_tool_digital_in(0))\n"
+              "textmsg(force())\ntextmsg(get_tool_accelerometer_reading())\n");
+  assert_string_equal(R.f.msg[0].text, "TrueFalse");
+  assert_string_equal(R.f.msg[1].text, "TrueFalse");
+  assert_string_equal(R.f.msg[2].text, "13");  // |(3, 4, 12)|; the torques do not count
+  assert_string_equal(R.f.msg[3].text, "[0.1,-0.2,9.81]");
+  assert_int_not_equal(sr_run(&R, "get_tool_digital_in(2)\n"), 0);
+}
+
 static void test_state__safety_limits(void **state) {
   sr_must(&R, "textmsg(is_within_safety_limits([0, -1.5, 1, 0, 0, 0]))\n"
               "textmsg(is_within_safety_limits([0, 0, 0, 0, 0, 7]))\n"
@@ -229,6 +243,7 @@ int main(void) {
       cmocka_unit_test_setup(test_state__tcp_argument_against_a_hand_composed_transform, setup),
       cmocka_unit_test_setup(test_state__flange_pose_and_getters, setup),
       cmocka_unit_test_setup(test_state__safety_limits, setup),
+      cmocka_unit_test_setup(test_state__inputs_force_accelerometer, setup),
       cmocka_unit_test_setup(test_state__gravity_and_target_payload_commands, setup),
       cmocka_unit_test_setup(test_state__popup_message_and_blocking, setup),
       cmocka_unit_test_setup(test_state__coriolis_is_quadratic_in_the_speeds, setup),
