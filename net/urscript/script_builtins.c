@@ -101,8 +101,7 @@ static const us_builtin kUnsupported[] = {
     {"force_mode_set_damping", NULL, 0, P(NULL)},
     {"force_mode_set_gain_scaling", NULL, 0, P(NULL)},
     {"tool_contact", NULL, 0, P(NULL)},
-    // a per-tick record of the joints (the VM's tick step, or a host-side history)
-    {"get_actual_joint_positions_history", NULL, 0, P(NULL)},
+    // a per-tick check (the VM's tick step)
     {"rtde_set_watchdog", NULL, 0, P(NULL)},
     // no external force/torque sensor input in urtwin
     {"ft_rtde_input_enable", NULL, 0, P(NULL)},

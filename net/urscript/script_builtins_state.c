@@ -74,6 +74,26 @@ static int b_get_joint_temp(vm *V, const us_node *n, sv *a, sv *out) {
   return X_OK;
 }
 
+/* get_actual_joint_positions_history(steps=0): the actual joint positions `steps` controller
+ * ticks before the newest snapshot (the controller keeps URT_LOOP_HISTORY ticks) */
+static int b_get_actual_joint_positions_history(vm *V, const us_node *n, sv *a, sv *out) {
+  int64_t steps = 0;
+  if (a[0].t != V_NONE && urt__us_arg_int(V, n, a, 0, &steps) != X_OK) return X_ERR;
+  const urt_script_host_t *h = V->h->host;
+  const urt_snapshot_t *now = urt__us_snap(V);
+  if (steps < 0 || (uint64_t)steps > now->tick) {
+    return urt__us_fail(V, n, "get_actual_joint_positions_history: %lld steps back is outside 0..%llu",
+                        (long long)steps, (unsigned long long)now->tick);
+  }
+  if (steps == 0) return vec_out(V, n, now->q, 6, out);
+  urt_snapshot_t past;
+  if (!h->snapshot_at || h->snapshot_at(h->ctx, now->tick - (uint64_t)steps, &past) != 0) {
+    return urt__us_fail(V, n, "get_actual_joint_positions_history: %lld steps back is older than the controller keeps",
+                        (long long)steps);
+  }
+  return vec_out(V, n, past.q, 6, out);
+}
+
 /* the flange: the actual TCP pose with the active TCP offset taken off */
 static int b_get_actual_tool_flange_pose(vm *V, const us_node *n, sv *a, sv *out) {
   const urt_snapshot_t *s = urt__us_snap(V);
@@ -271,6 +291,7 @@ static int b_popup(vm *V, const us_node *n, sv *a, sv *out) {
 const us_builtin urt__us_builtins_state[] = {
     {"get_steptime", b_get_steptime, 0, P(NULL)},
     {"get_joint_positions", b_get_joint_positions, 0, P(NULL)},
+    {"get_actual_joint_positions_history", b_get_actual_joint_positions_history, 0, P("steps")},
     {"get_target_tcp_speed", b_get_target_tcp_speed, 0, P(NULL)},
     {"get_target_joint_accelerations", b_get_target_joint_accelerations, 0, P(NULL)},
     {"get_actual_joint_accelerations", b_get_actual_joint_accelerations, 0, P(NULL)},

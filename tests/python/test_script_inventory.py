@@ -39,8 +39,7 @@ PENDING = {
     "force_mode_set_gain_scaling": MOTIONS, "freedrive_mode": MOTIONS,
     "end_freedrive_mode": MOTIONS, "teach_mode": MOTIONS, "end_teach_mode": MOTIONS,
     "tool_contact": MOTIONS + " (tool-contact detection)",
-    # need the joints recorded every controller tick: the VM's tick step or a host history
-    "get_actual_joint_positions_history": "needs a per-tick joint history (VM / host)",
+    # needs a check every controller tick
     "rtde_set_watchdog": "needs a per-tick check of the register's writes (VM)",
     # matrix values ([[…]], m[i, j]) are not URScript values in urtwin yet (VM)
     "get_jacobian": "returns a matrix: the VM's value types",

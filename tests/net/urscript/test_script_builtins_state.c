@@ -159,6 +159,29 @@ static void test_state__inputs_force_accelerometer(void **state) {
   assert_int_not_equal(sr_run(&R, "get_tool_digital_in(2)\n"), 0);
 }
 
+/* the fake's joints move every tick: q[0] = tick / 1000 */
+static uint64_t moving_wait_tick(void *ctx, uint64_t after, int timeout_ms) {
+  pthread_mutex_lock(&R.f.mu);
+  R.f.s.q[0] = (double)(R.f.s.tick + 1) / 1000.0;
+  pthread_mutex_unlock(&R.f.mu);
+  return fake_wait_tick(ctx, after, timeout_ms);
+}
+
+static void test_state__joint_positions_history(void **state) {
+  R.host.wait_tick = moving_wait_tick;
+  sr_must(&R, "sleep(0.04)\n"  // 20 ticks
+              "textmsg(get_actual_joint_positions_history()[0])\n"
+              "textmsg(get_actual_joint_positions_history(5)[0])\n"
+              "textmsg(get_actual_joint_positions_history(steps=20)[0])\n");
+  assert_string_equal(R.f.msg[0].text, "0.02");
+  assert_string_equal(R.f.msg[1].text, "0.015");
+  assert_string_equal(R.f.msg[2].text, "0");
+  assert_int_not_equal(sr_run(&R, "get_actual_joint_positions_history(21)\n"), 0);  // before tick 0
+  memset(&R.err, 0, sizeof R.err);
+  assert_int_not_equal(sr_run(&R, "sleep(0.2)\nget_actual_joint_positions_history(90)\n"), 0);
+  assert_non_null(strstr(R.err.text, "older than the controller keeps"));
+}
+
 static void test_state__safety_limits(void **state) {
   sr_must(&R, "textmsg(is_within_safety_limits([0, -1.5, 1, 0, 0, 0]))\n"
               "textmsg(is_within_safety_limits([0, 0, 0, 0, 0, 7]))\n"
@@ -243,6 +266,7 @@ int main(void) {
       cmocka_unit_test_setup(test_state__tcp_argument_against_a_hand_composed_transform, setup),
       cmocka_unit_test_setup(test_state__flange_pose_and_getters, setup),
       cmocka_unit_test_setup(test_state__safety_limits, setup),
+      cmocka_unit_test_setup(test_state__joint_positions_history, setup),
       cmocka_unit_test_setup(test_state__inputs_force_accelerometer, setup),
       cmocka_unit_test_setup(test_state__gravity_and_target_payload_commands, setup),
       cmocka_unit_test_setup(test_state__popup_message_and_blocking, setup),

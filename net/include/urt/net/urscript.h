@@ -79,6 +79,9 @@ typedef struct urt_script_host {
   void (*write_output_register)(void *ctx, int kind, int index, double value);
   /* Nullable: the loaded robot model, for native programs' kinematics and dynamics getters. */
   const urt_model_t *(*model)(void *ctx);
+  /* Nullable: the snapshot of an earlier tick (get_actual_joint_positions_history); 0, or
+   * nonzero when the controller no longer keeps it (or has not published it yet). */
+  int (*snapshot_at)(void *ctx, uint64_t tick, urt_snapshot_t *out);
 } urt_script_host_t;
 
 enum { URT_SCRIPT_REG_INT = 0, URT_SCRIPT_REG_DOUBLE = 1, URT_SCRIPT_REG_BIT = 2 };
