@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/urscript/script_builtins.c — the URScript builtin registry: every family's table
- * (script_builtins_robot.c, _io.c, _math.c, _socket.c, _state.c,
+ * (script_builtins_robot.c, _io.c, _math.c, _socket.c, _client.c,
  * _pose.c, _text.c) behind one index the parser resolves names to,
  * the names urtwin knows but does not emulate, and the argument readers every builtin uses.
  */
@@ -129,7 +129,7 @@ static const struct {
     {urt__us_builtins_io, &urt__us_n_builtins_io},
     {urt__us_builtins_math, &urt__us_n_builtins_math},
     {urt__us_builtins_socket, &urt__us_n_builtins_socket},
-    {urt__us_builtins_state, &urt__us_n_builtins_state},
+    {urt__us_builtins_client, &urt__us_n_builtins_client},
     {urt__us_builtins_pose, &urt__us_n_builtins_pose},
     {urt__us_builtins_text, &urt__us_n_builtins_text},
     {kUnsupported, &kNUnsupported},

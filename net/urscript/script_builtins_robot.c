@@ -2,7 +2,7 @@
  * net/urscript/script_builtins_robot.c — the URScript builtins that move the arm or read its
  * state: motions (movej … stopl, through script_controller.c), textmsg, sleep and sync in
  * controller time, the TCP and payload settings, and the joint and TCP getters (kinematics and the rest of the
- * state: script_builtins_state.c).
+ * state: script_builtins_client.c).
  */
 #include <math.h>
 #include <string.h>

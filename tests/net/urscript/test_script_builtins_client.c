@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0
- * tests/net/urscript/test_script_builtins_state.c — the state and kinematics builtins with the
+ * tests/net/urscript/test_script_builtins_client.c — the state and kinematics builtins with the
  * UR5's own kinematics behind the fake controller (as the emulator's host has them: the active
  * TCP offset applied): get_inverse_kin round trips, its qnear choosing the branch, its tcp and
  * get_forward_kin's against a transform composed by hand; the settings as the commands they
@@ -53,7 +53,7 @@ static double msg_num(int k) {
   return x[0];
 }
 
-static void test_state__inverse_kin_round_trip(void **state) {
+static void test_client__inverse_kin_round_trip(void **state) {
   sr_must(&R, MAXDIFF "q0 = [0.3, -1.2, 1.4, -1.7, -1.6, 0.2]\n"
                       "x = get_forward_kin(q0)\n"
                       "textmsg(maxdiff(get_inverse_kin(x, q0), q0))\n"
@@ -62,7 +62,7 @@ static void test_state__inverse_kin_round_trip(void **state) {
   assert_true(msg_num(1) < 1e-6);
 }
 
-static void test_state__qnear_chooses_the_branch(void **state) {
+static void test_client__qnear_chooses_the_branch(void **state) {
   // elbow up and elbow down reach the same pose: each qnear gets its own branch back
   const double q0[6] = {0.3, -1.2, 1.4, -1.7, -1.6, 0.2};
   double x[6], q1[6], zero[6] = {0};
@@ -94,7 +94,7 @@ static void test_state__qnear_chooses_the_branch(void **state) {
   assert_non_null(strstr(R.err.text, "no solution"));
 }
 
-static void test_state__tcp_argument_against_a_hand_composed_transform(void **state) {
+static void test_client__tcp_argument_against_a_hand_composed_transform(void **state) {
   // an active TCP and another one given as the argument: the flange pose F by the model with a
   // zero TCP, then F ∘ T composed here by hand (position F.p + R_F T.p)
   memcpy(R.f.s.tcp_offset, (double[6]){0, 0, 0.05, 0, 0, 0}, sizeof R.f.s.tcp_offset);
@@ -124,7 +124,7 @@ static void test_state__tcp_argument_against_a_hand_composed_transform(void **st
   assert_true(fabs(msg_num(3) - 0.05) < 1e-6);  // the flange is the active TCP minus 5 cm
 }
 
-static void test_state__flange_pose_and_getters(void **state) {
+static void test_client__flange_pose_and_getters(void **state) {
   R.f.s.period = 0.008;
   memcpy(R.f.s.tcp_offset, (double[6]){0, 0, 0.1, 0, 0, 0}, sizeof R.f.s.tcp_offset);
   memcpy(R.f.s.tcp_pose, (double[6]){0.3, 0.2, 0.5, 0, 0, 0}, sizeof R.f.s.tcp_pose);
@@ -145,7 +145,7 @@ static void test_state__flange_pose_and_getters(void **state) {
   for (int k = 0; k < 9; k++) assert_string_equal(R.f.msg[k].text, want[k]);
 }
 
-static void test_state__inputs_force_accelerometer(void **state) {
+static void test_client__inputs_force_accelerometer(void **state) {
   R.f.s.digital_in = 1u << 9 | 1u << 17;  // configurable input 1, tool input 1
   memcpy(R.f.s.tcp_force, (double[6]){3, 4, 12, 100, 100, 100}, sizeof R.f.s.tcp_force);
   memcpy(R.f.s.tool_accel, (double[3]){0.1, -0.2, 9.81}, sizeof R.f.s.tool_accel);
@@ -167,7 +167,7 @@ static uint64_t moving_wait_tick(void *ctx, uint64_t after, int timeout_ms) {
   return fake_wait_tick(ctx, after, timeout_ms);
 }
 
-static void test_state__joint_positions_history(void **state) {
+static void test_client__joint_positions_history(void **state) {
   R.host.wait_tick = moving_wait_tick;
   sr_must(&R, "sleep(0.04)\n"  // 20 ticks
               "textmsg(get_actual_joint_positions_history()[0])\n"
@@ -182,7 +182,7 @@ static void test_state__joint_positions_history(void **state) {
   assert_non_null(strstr(R.err.text, "older than the controller keeps"));
 }
 
-static void test_state__safety_limits(void **state) {
+static void test_client__safety_limits(void **state) {
   sr_must(&R, "textmsg(is_within_safety_limits([0, -1.5, 1, 0, 0, 0]))\n"
               "textmsg(is_within_safety_limits([0, 0, 0, 0, 0, 7]))\n"
               "textmsg(is_within_safety_limits(get_forward_kin([0.3, -1.2, 1.4, -1.7, -1.6, 0.2])))\n");
@@ -191,7 +191,7 @@ static void test_state__safety_limits(void **state) {
   assert_string_equal(R.f.msg[2].text, "True");
 }
 
-static void test_state__gravity_and_target_payload_commands(void **state) {
+static void test_client__gravity_and_target_payload_commands(void **state) {
   sr_must(&R, "set_gravity([0, 0, 9.82])\n"
               "set_target_payload(1.5, [0, 0.01, 0.05], [0.01, 0.02, 0.03, 0, 0, 0], 0.5)\n");
   assert_int_equal(R.f.n_cmd, 2);
@@ -210,7 +210,7 @@ static void test_state__gravity_and_target_payload_commands(void **state) {
   assert_int_not_equal(sr_run(&R, "set_gravity([0, 0])\n"), 0);
 }
 
-static void test_state__coriolis_is_quadratic_in_the_speeds(void **state) {
+static void test_client__coriolis_is_quadratic_in_the_speeds(void **state) {
   // C(q, q̇) q̇: zero at rest, four times as large at twice the speeds
   const double q[6] = {0.3, -1.2, 1.4, -1.7, -1.6, 0.2}, qd[6] = {0.4, -0.3, 0.5, 0.2, -0.6, 0.1};
   memcpy(R.f.s.q, q, sizeof q);
@@ -235,7 +235,7 @@ static void test_state__coriolis_is_quadratic_in_the_speeds(void **state) {
 static int polls;
 static int cancel_after_20(void *ctx) { return ++polls >= 20; }
 
-static void test_state__popup_message_and_blocking(void **state) {
+static void test_client__popup_message_and_blocking(void **state) {
   sr_must(&R, "popup(\"hello\", title=\"T1\", warning=True)\npopup(3.5)\n");
   assert_int_equal(R.f.n_msg, 2);
   assert_int_equal(R.f.msg[0].kind, URT_SCRIPT_MSG_POPUP);
@@ -261,16 +261,16 @@ static void test_state__popup_message_and_blocking(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test_setup(test_state__inverse_kin_round_trip, setup),
-      cmocka_unit_test_setup(test_state__qnear_chooses_the_branch, setup),
-      cmocka_unit_test_setup(test_state__tcp_argument_against_a_hand_composed_transform, setup),
-      cmocka_unit_test_setup(test_state__flange_pose_and_getters, setup),
-      cmocka_unit_test_setup(test_state__safety_limits, setup),
-      cmocka_unit_test_setup(test_state__joint_positions_history, setup),
-      cmocka_unit_test_setup(test_state__inputs_force_accelerometer, setup),
-      cmocka_unit_test_setup(test_state__gravity_and_target_payload_commands, setup),
-      cmocka_unit_test_setup(test_state__popup_message_and_blocking, setup),
-      cmocka_unit_test_setup(test_state__coriolis_is_quadratic_in_the_speeds, setup),
+      cmocka_unit_test_setup(test_client__inverse_kin_round_trip, setup),
+      cmocka_unit_test_setup(test_client__qnear_chooses_the_branch, setup),
+      cmocka_unit_test_setup(test_client__tcp_argument_against_a_hand_composed_transform, setup),
+      cmocka_unit_test_setup(test_client__flange_pose_and_getters, setup),
+      cmocka_unit_test_setup(test_client__safety_limits, setup),
+      cmocka_unit_test_setup(test_client__joint_positions_history, setup),
+      cmocka_unit_test_setup(test_client__inputs_force_accelerometer, setup),
+      cmocka_unit_test_setup(test_client__gravity_and_target_payload_commands, setup),
+      cmocka_unit_test_setup(test_client__popup_message_and_blocking, setup),
+      cmocka_unit_test_setup(test_client__coriolis_is_quadratic_in_the_speeds, setup),
   };
   return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

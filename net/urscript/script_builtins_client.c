@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0
- * net/urscript/script_builtins_state.c — the state getters and settings URCL's and ur_rtde's
+ * net/urscript/script_builtins_client.c — the state getters and settings URCL's and ur_rtde's
  * control scripts call beyond script_builtins_robot.c's: the step time, target speeds and
- * accelerations, joint torques, the flange pose, the payload as set, inverse kinematics with a
- * solution check, joint limits, and set_gravity / set_target_payload.
+ * accelerations, joint torques, the flange pose, the payload as set, the joints' history,
+ * inverse kinematics with qnear and tcp honoured and a solution check, joint limits, Coriolis
+ * torques, set_gravity / set_target_payload / set_tool_voltage, and popup.
  *
  * set_target_payload stores mass and centre of gravity exactly as set_payload does (the
  * controller's SET_PAYLOAD; the payload does not enter the dynamics yet); the inertia rides in
@@ -288,7 +289,7 @@ static int b_popup(vm *V, const us_node *n, sv *a, sv *out) {
 //---- table ----
 
 #define P(...) {__VA_ARGS__}
-const us_builtin urt__us_builtins_state[] = {
+const us_builtin urt__us_builtins_client[] = {
     {"get_steptime", b_get_steptime, 0, P(NULL)},
     {"get_joint_positions", b_get_joint_positions, 0, P(NULL)},
     {"get_actual_joint_positions_history", b_get_actual_joint_positions_history, 0, P("steps")},
@@ -315,5 +316,5 @@ const us_builtin urt__us_builtins_state[] = {
 };
 #undef P
 
-const int urt__us_n_builtins_state =
-    (int)(sizeof urt__us_builtins_state / sizeof urt__us_builtins_state[0]);
+const int urt__us_n_builtins_client =
+    (int)(sizeof urt__us_builtins_client / sizeof urt__us_builtins_client[0]);
