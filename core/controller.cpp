@@ -591,6 +591,14 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       }
       break;
     }
+    case URT_CTRL_SET_TOOL_VOLTAGE:
+      // set_tool_voltage: the three supplies a UR tool connector has
+      if (cmd->value != 0.0 && cmd->value != 12.0 && cmd->value != 24.0) {
+        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
+      } else {
+        c->tool_voltage = static_cast<int32_t>(cmd->value);
+      }
+      break;
     case URT_CTRL_SET_GRAVITY: {
       bool ok = all_finite(cmd->pose, 3);
       for (int i = 0; i < 3 && ok; i++) {

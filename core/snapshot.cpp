@@ -197,6 +197,7 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
     s->momentum = P.norm();
   }
   s->payload_mass = c->payload_mass;
+  s->tool_voltage = c->tool_voltage;
   std::memcpy(s->payload_cog, c->payload_cog, sizeof s->payload_cog);
 
   // power

@@ -51,6 +51,7 @@ struct Options {
   std::string programs_dir = "programs";
   std::string serial_number = "20235501783";
   double stats_every = 10.0;    // seconds between loop statistics lines (0: never)
+  std::vector<std::string> script_allow_hosts;
 };
 
 int parse_q0(const std::string& text, double q[URT_NJ]) {
@@ -141,6 +142,9 @@ int main(int argc, char** argv) {
                    : std::string("must be digits");
       })
       ->capture_default_str();
+  app.add_option("--script-allow-host", o.script_allow_hosts,
+                 "a host besides loopback that URScript's socket_open may dial, as the script "
+                 "writes it (repeatable, at most 16)");
   app.add_option("--stats-every", o.stats_every, "seconds between loop statistics lines (0: never)")
       ->capture_default_str();
   try {
@@ -148,6 +152,17 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     int rc = app.exit(e);
     return rc == 0 ? 0 : 2;
+  }
+
+  if (o.script_allow_hosts.size() > 16) {
+    std::fprintf(stderr, "urtwin: --script-allow-host: at most 16 hosts\n");
+    return 2;
+  }
+  for (const auto& h : o.script_allow_hosts) {
+    if (h.empty() || h.size() > 255) {
+      std::fprintf(stderr, "urtwin: --script-allow-host '%s': expected a host of 1..255 bytes\n", h.c_str());
+      return 2;
+    }
   }
 
   urt_version_t version;
@@ -209,6 +224,12 @@ int main(int argc, char** argv) {
   ec.local_control = o.local_control;
   ec.serial_number = o.serial_number.c_str();
   ec.rt_priority = o.rt_priority > 1 ? o.rt_priority - 1 : 0;  // just below the physics
+  std::vector<const char*> allow_hosts;
+  for (const auto& h : o.script_allow_hosts) {
+    allow_hosts.push_back(h.c_str());
+  }
+  ec.script_allow_hosts = allow_hosts.data();
+  ec.n_script_allow_hosts = static_cast<int>(allow_hosts.size());
   urt_emulator_t* emu = nullptr;
   if (urt_emulator_create(loop, &ec, &emu, err, sizeof err) != 0) {
     std::fprintf(stderr, "urtwin: %s\n", err);

@@ -196,7 +196,7 @@ static void put_tool_data(urt_wbuf_t *w, const urt_snapshot_t *s) {
   urt_be_put_f64(w, 0.0);
   urt_be_put_f64(w, 0.0);
   urt_be_put_f32(w, 0.0f);  /* tool voltage 48 V */
-  urt_be_put_u8(w, 0);      /* tool output voltage */
+  urt_be_put_u8(w, (uint8_t)s->tool_voltage);  /* tool output voltage (set_tool_voltage) */
   urt_be_put_f32(w, 0.0f);  /* tool current */
   urt_be_put_f32(w, 0.0f);  /* tool temperature */
   urt_be_put_u8(w, (uint8_t)s->joint_mode[URT_NJ - 1]);  /* tool mode follows wrist 3 */
@@ -418,6 +418,26 @@ int urt_primary_encode_key(uint64_t timestamp_us, int source, int32_t code, int3
   uint8_t *at = begin_message(&w, timestamp_us, source, URT_PRIMARY_MSG_KEY);
   urt_be_put_i32(&w, code);
   urt_be_put_i32(&w, argument);
+  urt_be_put_u8(&w, (uint8_t)title_len);
+  put_text(&w, title);
+  put_text(&w, text);
+  return end_message(&w, at);
+}
+
+int urt_primary_encode_popup(uint64_t timestamp_us, int source, uint32_t request_id,
+                             uint32_t requested_type, bool warning, bool error, bool blocking,
+                             const char *title, const char *text, uint8_t *buf, size_t cap) {
+  size_t title_len = title ? strlen(title) : 0;
+  if (title_len > 255) {
+    return URT_EINVAL;
+  }
+  urt_wbuf_t w = urt_wbuf_make(buf, cap);
+  uint8_t *at = begin_message(&w, timestamp_us, source, URT_PRIMARY_MSG_POPUP);
+  urt_be_put_u32(&w, request_id);
+  urt_be_put_u32(&w, requested_type);
+  urt_be_put_u8(&w, warning ? 1 : 0);
+  urt_be_put_u8(&w, error ? 1 : 0);
+  urt_be_put_u8(&w, blocking ? 1 : 0);
   urt_be_put_u8(&w, (uint8_t)title_len);
   put_text(&w, title);
   put_text(&w, text);

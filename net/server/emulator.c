@@ -348,7 +348,9 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   }
   urt_script_host_t host = urt__script_host(e);
   // the script thread shares the I/O thread's priority: both feed the physics thread's rings
-  urt_runner_config_t rcfg = {.rt_priority = e->cfg.rt_priority};
+  urt_runner_config_t rcfg = {.rt_priority = e->cfg.rt_priority,
+                              .allow_hosts = e->cfg.script_allow_hosts,
+                              .n_allow_hosts = e->cfg.n_script_allow_hosts};
   if (urt_runner_create(&host, &rcfg, &e->runner) != 0) {
     snprintf(err, err_sz, "cannot start the URScript runner");
     urt_emulator_destroy(e);

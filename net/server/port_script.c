@@ -32,6 +32,11 @@ void urt__script_broadcast(urt_emulator_t *e, const urt_script_msg_t *msg) {
       n = urt_primary_encode_key(ts, URT_PRIMARY_SOURCE_ROBOT_INTERFACE, msg->code, msg->argument,
                                  msg->title, msg->text, buf, sizeof buf);
       break;
+    case URT_SCRIPT_MSG_POPUP:
+      n = urt_primary_encode_popup(ts, URT_PRIMARY_SOURCE_ROBOT_INTERFACE, 0, 0, msg->warning,
+                                   msg->error, msg->blocking, msg->title, msg->text, buf,
+                                   sizeof buf);
+      break;
     case URT_SCRIPT_MSG_RUNTIME_EXCEPTION:
       n = urt_primary_encode_runtime_exception(ts, URT_PRIMARY_SOURCE_RT_MACHINE, msg->line,
                                                msg->column, msg->text, buf, sizeof buf);

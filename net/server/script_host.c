@@ -75,6 +75,11 @@ static void host_write_output_register(void *ctx, int kind, int index, double va
   pthread_mutex_unlock(&e->reg_lock);
 }
 
+static int host_snapshot_at(void *ctx, uint64_t tick, urt_snapshot_t *out) {
+  urt_emulator_t *e = ctx;
+  return urt_loop_read(e->loop, tick, out);  // the loop keeps URT_LOOP_HISTORY ticks
+}
+
 static const urt_model_t *host_model(void *ctx) {
   const urt_emulator_t *e = ctx;
   return e->m;
@@ -92,5 +97,6 @@ urt_script_host_t urt__script_host(urt_emulator_t *e) {
       .read_registers = host_read_registers,
       .write_output_register = host_write_output_register,
       .model = host_model,
+      .snapshot_at = host_snapshot_at,
   };
 }

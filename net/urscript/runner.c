@@ -18,6 +18,7 @@
 #include <time.h>
 
 #include "script.h"
+#include "script_socket.h"
 #include "urt/errors.h"
 #include "urt/thread.h"
 
@@ -46,6 +47,7 @@ struct urt_runner {
   bool quit, busy;
   _Atomic int state;       /* URT_PROGRAM_*                         */
   uint64_t motion_id;      /* runner thread only                    */
+  us_sockets *sockets;     /* the main program's sockets (runner thread only) */
   /* the running main program (runner thread only) */
   uint64_t cur_seq, cur_stop;
 };
@@ -153,12 +155,16 @@ static void run_main(urt_runner_t *r, const unit *u) {
 
   set_state(r, URT_PROGRAM_PLAYING);
   emit_key(r, "PROGRAM_XXX_STARTED", p->name);
-  us_hooks h = {.host = &r->host, .motion_id = &r->motion_id, .step_budget = r->cfg.step_budget,
-                .wait_timeout_ms = r->cfg.wait_timeout_ms, .poll = poll_main, .poll_ctx = r};
+  us_hooks h = {.host = &r->host, .sockets = r->sockets, .motion_id = &r->motion_id,
+                .step_budget = r->cfg.step_budget, .wait_timeout_ms = r->cfg.wait_timeout_ms,
+                .poll = poll_main, .poll_ctx = r};
   p->secondary = false;
   if (urt__us_run(p, &h, &e) != 0) {
     report(r, &e, false);
   }
+  // the peers see the disconnect now, before the next program dials them (URCL's servers
+  // take one client each: external_control.md §2.1, §6)
+  urt__us_sockets_close_all(r->sockets);
 
   // the end of a program stops the arm (speedj without t, blends, a stop from outside)
   urt_ctrl_cmd_t halt = {.kind = URT_CTRL_HALT, .a = HALT_DECELERATION};
@@ -235,6 +241,12 @@ int urt_runner_create(const urt_script_host_t *host, const urt_runner_config_t *
   if (cfg) {
     r->cfg = *cfg;
   }
+  r->sockets = urt__us_sockets_new(r->cfg.allow_hosts, r->cfg.n_allow_hosts);
+  r->cfg.allow_hosts = NULL;  // copied into the table
+  if (!r->sockets) {
+    free(r);
+    return URT_EINVAL;
+  }
   if (r->cfg.step_budget <= 0) {
     r->cfg.step_budget = 200000;
   }
@@ -256,6 +268,7 @@ int urt_runner_create(const urt_script_host_t *host, const urt_runner_config_t *
     pthread_cond_destroy(&r->idle_cv);
     pthread_cond_destroy(&r->cv);
     pthread_mutex_destroy(&r->mu);
+    urt__us_sockets_free(r->sockets);
     free(r);
     return URT_EIO;
   }
@@ -347,5 +360,6 @@ void urt_runner_destroy(urt_runner_t *r) {
   pthread_cond_destroy(&r->idle_cv);
   pthread_cond_destroy(&r->cv);
   pthread_mutex_destroy(&r->mu);
+  urt__us_sockets_free(r->sockets);
   free(r);
 }

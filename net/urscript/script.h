@@ -114,10 +114,19 @@ void urt__us_prog_free(us_prog *p);
 /* Builtin index by name, -1 if none. */
 int urt__us_builtin_find(const char *name, int len);
 
+/* Whether urtwin runs builtin k (false: a controller function it knows and refuses, which the
+ * name check makes a compile error). */
+bool urt__us_builtin_supported(int k);
+
 //---- interpreter ----
+
+struct us_sockets;
 
 typedef struct us_hooks {
   const urt_script_host_t *host;
+  /* the program's sockets (script_socket.h), owned by the runner, which closes them when the
+   * program ends. Nullable: socket builtins are runtime errors (secondary programs). */
+  struct us_sockets *sockets;
   uint64_t *motion_id;     /* last motion id used by this runner (incremented per motion) */
   int64_t step_budget;     /* steps between ticks */
   int wait_timeout_ms;
@@ -133,6 +142,8 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err);
 /* Pose algebra shared with the native programs: axis-angle → row-major rotation matrix, and
  * pose_trans(p_from, p_from_to) = p_from ∘ p_from_to. */
 void urt__us_rotvec_to_mat(const double r[3], double R[9]);
+void urt__us_mat_to_rotvec(const double R[9], double r[3]);
+void urt__us_mat_mul(const double A[9], const double B[9], double C[9]);  /* C = A B, row-major */
 void urt__us_pose_trans(const double p_from[6], const double p_from_to[6], double out[6]);
 
 /* Whether the safety mode lets the arm move (normal or reduced). */

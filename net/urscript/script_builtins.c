@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/urscript/script_builtins.c — the URScript builtin registry: every family's table
- * (script_builtins_robot.c, _io.c, _math.c) behind one index the parser resolves names to,
+ * (script_builtins_robot.c, _io.c, _math.c, _socket.c, _client.c,
+ * _pose.c, _text.c) behind one index the parser resolves names to,
  * the names urtwin knows but does not emulate, and the argument readers every builtin uses.
  */
 #include <math.h>
@@ -77,26 +78,25 @@ int urt__us_arg_bool(vm *V, const us_node *n, const sv *a, int k, bool *out) {
 
 //---- the registry ----
 
-/* known URScript, not emulated: a runtime error before anything of the call happens */
+/* known URScript, not emulated: a compile error naming it (script_parse.c's name check), so a
+ * program that calls one never starts. Each is named in tests/python/test_script_inventory.py's
+ * PENDING when a client script calls it. */
 #define P(...) {__VA_ARGS__}
 static const us_builtin kUnsupported[] = {
     {"movep", NULL, 0, P(NULL)},
     {"movec", NULL, 0, P(NULL)},
     {"servol", NULL, 0, P(NULL)},
-    {"socket_open", NULL, 0, P(NULL)},
-    {"socket_close", NULL, 0, P(NULL)},
-    {"socket_send_string", NULL, 0, P(NULL)},
-    {"socket_send_line", NULL, 0, P(NULL)},
-    {"socket_read_ascii_float", NULL, 0, P(NULL)},
-    {"socket_read_binary_integer", NULL, 0, P(NULL)},
-    {"popup", NULL, 0, P(NULL)},
-    {"set_tool_voltage", NULL, 0, P(NULL)},
     {"rpc_factory", NULL, 0, P(NULL)},
-    {"protective_stop", NULL, 0, P(NULL)},
-    {"get_target_waypoint", NULL, 0, P(NULL)},
-    {"get_target_payload_inertia", NULL, 0, P(NULL)},
-    {"enable_external_ft_sensor", NULL, 0, P(NULL)},
+    // the controller's motions and modes that urtwin does not have yet
+    {"optimovej", NULL, 0, P(NULL)},
+    {"optimovel", NULL, 0, P(NULL)},
+    // no external force/torque sensor input in urtwin
     {"ft_rtde_input_enable", NULL, 0, P(NULL)},
+    {"enable_external_ft_sensor", NULL, 0, P(NULL)},
+    // no controller state behind them yet
+    {"get_target_payload_inertia", NULL, 0, P(NULL)},
+    {"get_target_waypoint", NULL, 0, P(NULL)},
+    {"protective_stop", NULL, 0, P(NULL)},
 };
 #undef P
 
@@ -113,6 +113,10 @@ static const struct {
     {urt__us_builtins_state, &urt__us_n_builtins_state},
     {urt__us_builtins_modes, &urt__us_n_builtins_modes},
     {urt__us_builtins_service, &urt__us_n_builtins_service},
+    {urt__us_builtins_socket, &urt__us_n_builtins_socket},
+    {urt__us_builtins_client, &urt__us_n_builtins_client},
+    {urt__us_builtins_pose, &urt__us_n_builtins_pose},
+    {urt__us_builtins_text, &urt__us_n_builtins_text},
     {kUnsupported, &kNUnsupported},
 };
 
@@ -130,6 +134,11 @@ int urt__us_builtin_find(const char *name, int len) {
     base += *kFamilies[f].n;
   }
   return -1;
+}
+
+bool urt__us_builtin_supported(int k) {
+  const us_builtin *b = urt__us_builtin_get(k);
+  return b && b->fn;
 }
 
 const us_builtin *urt__us_builtin_get(int k) {

@@ -56,6 +56,8 @@ static int b_get_configurable_digital_out(vm *V, const us_node *n, sv *a, sv *ou
 static int b_get_tool_digital_out(vm *V, const us_node *n, sv *a, sv *out) { return get_bit(V, n, a, out, false, 16, 2); }
 static int b_get_standard_digital_in(vm *V, const us_node *n, sv *a, sv *out) { return get_bit(V, n, a, out, true, 0, 8); }
 static int b_get_digital_in(vm *V, const us_node *n, sv *a, sv *out) { return get_bit(V, n, a, out, true, 0, 18); }
+static int b_get_configurable_digital_in(vm *V, const us_node *n, sv *a, sv *out) { return get_bit(V, n, a, out, true, 8, 8); }
+static int b_get_tool_digital_in(vm *V, const us_node *n, sv *a, sv *out) { return get_bit(V, n, a, out, true, 16, 2); }
 
 //---- RTDE registers (protocols.md §2.5–2.6) ----
 
@@ -133,6 +135,8 @@ const us_builtin urt__us_builtins_io[] = {
     {"get_tool_digital_out", b_get_tool_digital_out, 1, P("n")},
     {"get_standard_digital_in", b_get_standard_digital_in, 1, P("n")},
     {"get_digital_in", b_get_digital_in, 1, P("n")},
+    {"get_configurable_digital_in", b_get_configurable_digital_in, 1, P("n")},
+    {"get_tool_digital_in", b_get_tool_digital_in, 1, P("n")},
     // RTDE registers
     {"write_output_integer_register", b_write_output_integer_register, 2, P("address", "value")},
     {"write_output_float_register", b_write_output_float_register, 2, P("address", "value")},

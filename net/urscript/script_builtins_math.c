@@ -32,7 +32,14 @@ static int b_asin(vm *V, const us_node *n, sv *a, sv *out) { return math1(V, n, 
 static int b_acos(vm *V, const us_node *n, sv *a, sv *out) { return math1(V, n, a, out, acos, -1, 1); }
 static int b_atan(vm *V, const us_node *n, sv *a, sv *out) { return math1(V, n, a, out, atan, -HUGE_VAL, HUGE_VAL); }
 static int b_sqrt(vm *V, const us_node *n, sv *a, sv *out) { return math1(V, n, a, out, sqrt, 0, HUGE_VAL); }
-static int b_log(vm *V, const us_node *n, sv *a, sv *out) { return math1(V, n, a, out, log, 0, HUGE_VAL); }
+/* log(b, f): the logarithm of f to the base b (UR's log takes the base first) */
+static int b_log(vm *V, const us_node *n, sv *a, sv *out) {
+  double b, f;
+  if (urt__us_arg_num(V, n, a, 0, 0, &b) != X_OK || urt__us_arg_num(V, n, a, 1, 0, &f) != X_OK) return X_ERR;
+  if (!(b > 0) || b == 1 || !(f > 0)) return urt__us_fail(V, n, "log: base %g or value %g out of range", b, f);
+  *out = mk_float(log(f) / log(b));
+  return X_OK;
+}
 static int b_d2r(vm *V, const us_node *n, sv *a, sv *out) { return math1(V, n, a, out, d2r, -HUGE_VAL, HUGE_VAL); }
 static int b_r2d(vm *V, const us_node *n, sv *a, sv *out) { return math1(V, n, a, out, r2d, -HUGE_VAL, HUGE_VAL); }
 static int b_fabs(vm *V, const us_node *n, sv *a, sv *out) { return math1(V, n, a, out, fabs, -HUGE_VAL, HUGE_VAL); }
@@ -78,7 +85,9 @@ static int b_norm(vm *V, const us_node *n, sv *a, sv *out) {
   }
   double s = 0;
   if (a[0].t == V_POSE) {
-    for (int j = 0; j < 3; j++) s += a[0].u.p[j] * a[0].u.p[j];  // position part
+    // UR: "the euclidian norm of the pose", all six numbers (norm(p[-.2,.2,-.2,-1.57,0,3.14])
+    // is 3.52768 in the script manual)
+    for (int j = 0; j < 6; j++) s += a[0].u.p[j] * a[0].u.p[j];
   } else if (a[0].t == V_LIST) {
     for (int j = 0; j < a[0].n; j++) {
       if (!is_num(&a[0].u.l[j])) return urt__us_fail(V, n, "Type error: norm of a list of %s", type_name(a[0].u.l[j].t));
@@ -163,7 +172,7 @@ void urt__us_rotvec_to_mat(const double r[3], double R[9]) {
   memcpy(R, M, sizeof M);
 }
 
-static void mat_to_rotvec(const double R[9], double r[3]) {
+void urt__us_mat_to_rotvec(const double R[9], double r[3]) {
   double c = (R[0] + R[4] + R[8] - 1) / 2;
   c = c > 1 ? 1 : c < -1 ? -1 : c;
   double th = acos(c);
@@ -187,7 +196,7 @@ static void mat_to_rotvec(const double R[9], double r[3]) {
   r[2] = (R[3] - R[1]) * k;
 }
 
-static void mat_mul(const double A[9], const double B[9], double C[9]) {
+void urt__us_mat_mul(const double A[9], const double B[9], double C[9]) {
   for (int i = 0; i < 3; i++) {
     for (int j = 0; j < 3; j++) {
       C[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
@@ -204,9 +213,9 @@ void urt__us_pose_trans(const double p[6], const double q[6], double o[6]) {
   double Rp[9], Rq[9], R[9];
   urt__us_rotvec_to_mat(p + 3, Rp);
   urt__us_rotvec_to_mat(q + 3, Rq);
-  mat_mul(Rp, Rq, R);
+  urt__us_mat_mul(Rp, Rq, R);
   for (int i = 0; i < 3; i++) o[i] = p[i] + Rp[3 * i] * q[0] + Rp[3 * i + 1] * q[1] + Rp[3 * i + 2] * q[2];
-  mat_to_rotvec(R, o + 3);
+  urt__us_mat_to_rotvec(R, o + 3);
 }
 
 /* pose_trans(p_from, p_from_to) = p_from ∘ p_from_to */
@@ -225,9 +234,9 @@ static int b_pose_add(vm *V, const us_node *n, sv *a, sv *out) {
   double Rp[9], Rq[9], R[9], o[6];
   urt__us_rotvec_to_mat(p + 3, Rp);
   urt__us_rotvec_to_mat(q + 3, Rq);
-  mat_mul(Rq, Rp, R);
+  urt__us_mat_mul(Rq, Rp, R);
   for (int i = 0; i < 3; i++) o[i] = p[i] + q[i];
-  mat_to_rotvec(R, o + 3);
+  urt__us_mat_to_rotvec(R, o + 3);
   *out = mk_pose(o);
   return X_OK;
 }
@@ -258,7 +267,7 @@ static int b_pose_inv(vm *V, const us_node *n, sv *a, sv *out) {
     for (int j = 0; j < 3; j++) Rt[3 * i + j] = R[3 * j + i];
   }
   for (int i = 0; i < 3; i++) o[i] = -(Rt[3 * i] * p[0] + Rt[3 * i + 1] * p[1] + Rt[3 * i + 2] * p[2]);
-  mat_to_rotvec(Rt, o + 3);
+  urt__us_mat_to_rotvec(Rt, o + 3);
   *out = mk_pose(o);
   return X_OK;
 }
@@ -276,7 +285,7 @@ const us_builtin urt__us_builtins_math[] = {
     {"atan", b_atan, 1, P("f")},
     {"atan2", b_atan2, 2, P("x", "y")},
     {"sqrt", b_sqrt, 1, P("f")},
-    {"log", b_log, 1, P("f")},
+    {"log", b_log, 2, P("b", "f")},
     {"pow", b_pow, 2, P("base", "exponent")},
     {"d2r", b_d2r, 1, P("d")},
     {"r2d", b_r2d, 1, P("r")},

@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/urscript/script_builtins_robot.c — the URScript builtins that move the arm or read its
  * state: motions (movej … stopl, through script_controller.c), textmsg, sleep and sync in
- * controller time, the TCP and payload settings, and the joint, TCP and kinematics getters.
+ * controller time, the TCP and payload settings, and the joint and TCP getters (kinematics and the rest of the
+ * state: script_builtins_client.c).
  */
 #include <math.h>
 #include <string.h>
@@ -246,36 +247,6 @@ static int b_is_steady(vm *V, const us_node *n, sv *a, sv *out) {
   return X_OK;
 }
 
-static int b_get_inverse_kin(vm *V, const us_node *n, sv *a, sv *out) {
-  // the solution nearest qnear (default: the actual joints); the active TCP (tcp= refused)
-  double x[6], qnear[6], q[6];
-  if (urt__us_arg_vec6(V, n, a, 0, x, NULL) != X_OK) return X_ERR;
-  memcpy(qnear, urt__us_snap(V)->q, sizeof qnear);
-  if (a[1].t != V_NONE && urt__us_arg_vec6(V, n, a, 1, qnear, NULL) != X_OK) return X_ERR;
-  if (a[4].t != V_NONE) {
-    return urt__us_fail(V, n, "get_inverse_kin: the tcp argument is not supported by urtwin "
-                              "(the active TCP is used)");
-  }
-  const urt_script_host_t *h = V->h->host;
-  if (!h->inverse_kinematics) return urt__us_fail(V, n, "Inverse kinematics is not available");
-  if (h->inverse_kinematics(h->ctx, x, qnear, q) != 0) {
-    return urt__us_fail(V, n, "Inverse kinematics failed: no solution for the pose");
-  }
-  return vec_out(V, n, q, out);
-}
-
-static int b_get_forward_kin(vm *V, const us_node *n, sv *a, sv *out) {
-  double q[6], p[6];
-  if (a[0].t == V_NONE) {
-    memcpy(q, urt__us_snap(V)->q, sizeof q);
-  } else if (urt__us_arg_vec6(V, n, a, 0, q, NULL) != X_OK) {
-    return X_ERR;
-  }
-  if (to_pose(V, n, q, false, p) != X_OK) return X_ERR;
-  *out = mk_pose(p);
-  return X_OK;
-}
-
 //---- table ----
 
 #define P(...) {__VA_ARGS__}
@@ -307,8 +278,6 @@ const us_builtin urt__us_builtins_robot[] = {
     {"get_actual_tcp_speed", b_get_actual_tcp_speed, 0, P(NULL)},
     {"get_tcp_offset", b_get_tcp_offset, 0, P(NULL)},
     {"is_steady", b_is_steady, 0, P(NULL)},
-    {"get_inverse_kin", b_get_inverse_kin, 1, P("x", "qnear", "maxPositionError", "maxOrientationError", "tcp")},
-    {"get_forward_kin", b_get_forward_kin, 0, P("q", "tcp")},
 };
 #undef P
 

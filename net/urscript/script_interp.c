@@ -423,7 +423,8 @@ static int call_builtin(vm *V, const us_node *n, sv *out) {
   const us_builtin *b = urt__us_builtin_get(n->builtin);
   if (!b) return urt__us_fail(V, n, "internal: unresolved call");
   if (!b->fn) {
-    // known URScript, not emulated: a runtime error before anything of the call happens
+    // known URScript that urtwin does not emulate: a runtime error naming it, where it is
+    // reached (the name check lets it compile: script_parse.c says why)
     return urt__us_fail(V, n, "%.*s is not supported by urtwin", n->name->len, n->name->s);
   }
   int np = 0;

@@ -936,6 +936,10 @@ static void resolve(check *C, us_node *n) {
         name_error(C, n, "compile_error_name_not_found:%.*s:");
         return;
       }
+      // A function the controller has and urtwin does not compiles and is a runtime error
+      // naming it when reached (never a no-op). Not a compile error: URCL's and ur_rtde's
+      // scripts call such functions in branches picked at run time by the client's command,
+      // and refusing the whole script would take every other command away with them.
     }
   } else if (n->kind == N_ASSIGN && n->a && !C->bound[n->name->id] && !is_constant(n->name)) {
     name_error(C, n, "compile_error_name_not_found:%.*s:");

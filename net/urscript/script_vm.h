@@ -208,9 +208,13 @@ typedef struct us_builtin {
 
 /* Each family's table, defined next to its builtins; script_builtins.c joins them. */
 extern const us_builtin urt__us_builtins_robot[], urt__us_builtins_io[], urt__us_builtins_math[],
-    urt__us_builtins_state[], urt__us_builtins_modes[], urt__us_builtins_service[];
+    urt__us_builtins_state[], urt__us_builtins_modes[], urt__us_builtins_service[],
+    urt__us_builtins_socket[], urt__us_builtins_client[], urt__us_builtins_pose[],
+    urt__us_builtins_text[];
 extern const int urt__us_n_builtins_robot, urt__us_n_builtins_io, urt__us_n_builtins_math,
-    urt__us_n_builtins_state, urt__us_n_builtins_modes, urt__us_n_builtins_service;
+    urt__us_n_builtins_state, urt__us_n_builtins_modes, urt__us_n_builtins_service,
+    urt__us_n_builtins_socket, urt__us_n_builtins_client, urt__us_n_builtins_pose,
+    urt__us_n_builtins_text;
 
 /* The builtin urt__us_builtin_find gave index k, NULL for any other k. */
 const us_builtin *urt__us_builtin_get(int k);

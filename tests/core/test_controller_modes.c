@@ -243,6 +243,24 @@ static void test_set_wrench__shows_in_tcp_force_and_bad_values_are_refused(void 
   rig_free(&r);
 }
 
+static void test_set_tool_voltage__kept_shown_and_bad_values_refused(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  assert_int_equal(snap(&r).tool_voltage, 0);
+  urt_ctrl_cmd_t v = cmd_of(&r, URT_CTRL_SET_TOOL_VOLTAGE);
+  v.value = 24;
+  rig_period(&r, &v);
+  assert_int_equal(snap(&r).tool_voltage, 24);
+  v.value = 5;  // a tool connector has 0, 12 or 24 V
+  rig_period(&r, &v);
+  assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
+  assert_int_equal(snap(&r).tool_voltage, 24);
+  v.value = 12;
+  rig_period(&r, &v);
+  assert_int_equal(snap(&r).tool_voltage, 12);
+  rig_free(&r);
+}
+
 //---- direct torque ----
 
 /* stream directTorque with the model's gravity at the measured position for t seconds; returns
@@ -675,6 +693,7 @@ int main(void) {
       cmocka_unit_test(test_pause__movej_slows_holds_and_resumes_to_the_same_target),
       cmocka_unit_test(test_pause__streaming_stops_and_program_stop_clears_the_pause),
       cmocka_unit_test(test_set_wrench__shows_in_tcp_force_and_bad_values_are_refused),
+      cmocka_unit_test(test_set_tool_voltage__kept_shown_and_bad_values_refused),
       cmocka_unit_test(test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it),
       cmocka_unit_test(test_freedrive__holds_without_a_wrench_and_gives_way_to_one),
       cmocka_unit_test(test_freedrive__held_axes_resist_free_axis_gives_way),

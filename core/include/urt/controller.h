@@ -124,7 +124,8 @@ typedef enum urt_ctrl_cmd_kind {
                                  index = type (1..3), qd = limits (speeds [m/s, rad/s] of the
                                  compliant axes / deviations [m, rad] of the others); not a
                                  motion: a following SPEEDL runs inside it                    */
-  URT_CTRL_FORCE_MODE_END     /* leave force mode                                           */
+  URT_CTRL_FORCE_MODE_END,    /* leave force mode                                           */
+  URT_CTRL_SET_TOOL_VOLTAGE   /* value = 0, 12 or 24: the tool connector's supply [V]        */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
@@ -201,6 +202,7 @@ typedef struct urt_ctrl {
   double gravity[3];          /* the controller's gravity (SET_GRAVITY), base  [m/s²]     */
   int32_t force_mode;         /* 1 while force mode is on                                 */
   urt_ctrl_cmd_t force;       /* its parameters: the last FORCE_MODE                      */
+  int32_t tool_voltage;       /* the tool connector's supply (SET_TOOL_VOLTAGE)  [V]      */
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or

@@ -77,6 +77,7 @@ typedef struct urt_snapshot {
   uint64_t overruns;          /* periods that finished late                           */
   uint64_t missed_periods;    /* whole periods skipped to catch up                    */
   uint64_t cmd_dropped;       /* commands refused because a ring was full             */
+  int32_t tool_voltage;       /* tool connector supply (set_tool_voltage)   [V]       */
 } urt_snapshot_t;
 
 /* Fill a snapshot from the physics and the controller (calls urt_data_update_outputs).

@@ -312,6 +312,29 @@ static void test_primary_encode_key__title_and_text(void **state) {
   assert_int_equal(urt_primary_encode_key(0, -2, 0, 0, "T", "x", b, 20), URT_ENOSPC);
 }
 
+static void test_primary_encode_popup__flags_title_text(void **state) {
+  uint8_t b[256];
+  int n = urt_primary_encode_popup(5, URT_PRIMARY_SOURCE_ROBOT_INTERFACE, 0, 0, false, true, true,
+                                   "Error connecting", "check the PC", b, sizeof b);
+  assert_int_equal(n, 15 + 4 + 4 + 3 + 1 + 16 + 12);
+  assert_int_equal(rd_i32(b), n);
+  assert_int_equal(b[4], 20);
+  assert_int_equal(b[14], 2);
+  assert_int_equal(rd_u32(b + 15), 0);
+  assert_int_equal(rd_u32(b + 19), 0);
+  assert_int_equal(b[23], 0);  // warning
+  assert_int_equal(b[24], 1);  // error
+  assert_int_equal(b[25], 1);  // blocking
+  assert_int_equal(b[26], 16);
+  assert_memory_equal(b + 27, "Error connecting", 16);
+  assert_memory_equal(b + 43, "check the PC", 12);
+  char long_title[300];
+  memset(long_title, 'A', sizeof long_title - 1);
+  long_title[sizeof long_title - 1] = '\0';
+  assert_int_equal(urt_primary_encode_popup(0, -2, 0, 0, 0, 0, 0, long_title, "", b, sizeof b), URT_EINVAL);
+  assert_int_equal(urt_primary_encode_popup(0, -2, 0, 0, 0, 0, 0, "T", "x", b, 20), URT_ENOSPC);
+}
+
 static void test_primary_encode_runtime_exception__line_column_text(void **state) {
   uint8_t b[128];
   const char *text = "compile_error_name_not_found:foo:";
@@ -363,6 +386,7 @@ int main(void) {
       cmocka_unit_test(test_primary_robot_state__returns_enospc_when_cap_is_short),
       cmocka_unit_test(test_primary_encode_version__golden_bytes),
       cmocka_unit_test(test_primary_encode_key__title_and_text),
+      cmocka_unit_test(test_primary_encode_popup__flags_title_text),
       cmocka_unit_test(test_primary_encode_runtime_exception__line_column_text),
       cmocka_unit_test(test_primary_encode_error_code_and_safety_mode),
   };

@@ -13,6 +13,7 @@
 #include "urt/net/urscript.h"
 
 #define FAKE_MAX 256
+#define FAKE_HISTORY 64  /* snapshots kept for snapshot_at */
 
 typedef struct fake_host {
   pthread_mutex_t mu;
@@ -30,6 +31,7 @@ typedef struct fake_host {
   int n_cmd;
   urt_script_msg_t msg[FAKE_MAX];
   int n_msg;
+  urt_snapshot_t history[FAKE_HISTORY];  /* by tick % FAKE_HISTORY, written at each tick */
 } fake_host;
 
 static inline bool is_motion(int kind) {
@@ -91,8 +93,18 @@ static inline uint64_t fake_wait_tick(void *ctx, uint64_t after, int timeout_ms)
     f->pending_id = 0;
   }
   uint64_t t = f->s.tick;
+  f->history[t % FAKE_HISTORY] = f->s;
   pthread_mutex_unlock(&f->mu);
   return t;
+}
+
+static inline int fake_snapshot_at(void *ctx, uint64_t tick, urt_snapshot_t *out) {
+  fake_host *f = ctx;
+  pthread_mutex_lock(&f->mu);
+  bool kept = tick <= f->s.tick && f->s.tick - tick < FAKE_HISTORY && f->history[tick % FAKE_HISTORY].tick == tick;
+  if (kept) *out = f->history[tick % FAKE_HISTORY];
+  pthread_mutex_unlock(&f->mu);
+  return kept ? 0 : -1;
 }
 
 static inline void fake_snapshot(void *ctx, urt_snapshot_t *out) {
@@ -124,7 +136,7 @@ static inline void fake_init(fake_host *f, urt_script_host_t *h) {
   f->s.program_state = URT_PROGRAM_STOPPED;
   *h = (urt_script_host_t){.ctx = f, .submit = fake_submit, .wait_tick = fake_wait_tick,
                            .snapshot = fake_snapshot, .message = fake_message,
-                           .inverse_kinematics = fake_ik};
+                           .inverse_kinematics = fake_ik, .snapshot_at = fake_snapshot_at};
 }
 
 /* index of the first command of a kind at or after from, or -1 */

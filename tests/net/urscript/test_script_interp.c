@@ -331,9 +331,6 @@ static void test_interp__runtime_errors_carry_line_and_column(void **state) {
   setup(NULL);
   assert_int_equal(run_text("movej([0,0,0,0,0,0], speed=1)\n", 0), -1);
   assert_string_equal(R.err.text, "Type error: movej has no parameter speed");
-  setup(NULL);
-  assert_int_equal(run_text("socket_open(\"1.2.3.4\", 5)\n", 0), -1);
-  assert_string_equal(R.err.text, "socket_open is not supported by urtwin");
 }
 
 static void test_interp__full_command_ring_is_retried_on_later_ticks(void **state) {

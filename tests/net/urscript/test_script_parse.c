@@ -110,6 +110,13 @@ static void test_parse__unknown_function_is_a_compile_error_at_its_position(void
                "compile_error_name_not_found:calldoesntexist:");
 }
 
+static void test_parse__unsupported_function_compiles_for_a_runtime_error(void **state) {
+  // a controller function urtwin does not run compiles (client scripts hold such calls in
+  // branches their commands pick); reaching it is a runtime error naming it (script_interp)
+  us_prog *p = parse_ok("def f():\n  if False:\n    optimovej([0,0,0,0,0,0])\n  end\nend\n");
+  urt__us_prog_free(p);
+}
+
 static void test_parse__unknown_variable_is_a_compile_error(void **state) {
   expect_error("def f():\n  x = 1\n  y = x + zz\nend\n", 3, 11, "compile_error_name_not_found:zz:");
 }
@@ -187,6 +194,7 @@ int main(void) {
       cmocka_unit_test(test_parse__sec_program_is_secondary),
       cmocka_unit_test(test_parse__numbers),
       cmocka_unit_test(test_parse__unknown_function_is_a_compile_error_at_its_position),
+      cmocka_unit_test(test_parse__unsupported_function_compiles_for_a_runtime_error),
       cmocka_unit_test(test_parse__unknown_variable_is_a_compile_error),
       cmocka_unit_test(test_parse__syntax_error_names_the_line),
       cmocka_unit_test(test_parse__missing_end),

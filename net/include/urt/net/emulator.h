@@ -30,6 +30,9 @@ typedef struct urt_emulator_config {
   const char *serial_number; /* digits; NULL: "20235501783"                            */
   int rt_priority;           /* > 0: SCHED_FIFO priority of the I/O and script threads
                                 (best effort)                                              */
+  const char *const *script_allow_hosts;  /* hosts besides loopback URScript's socket_open
+                                             may dial (--script-allow-host; at most 16)   */
+  int n_script_allow_hosts;
 } urt_emulator_config_t;
 
 /* Per-port counters (readable while running, approximately). */

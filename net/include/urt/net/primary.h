@@ -14,6 +14,7 @@
 #ifndef URT_NET_PRIMARY_H
 #define URT_NET_PRIMARY_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -55,6 +56,7 @@ enum {
 /* ROBOT_MESSAGE types (protocols.md §4.5) and sources. */
 enum {
   URT_PRIMARY_MSG_TEXT = 0,
+  URT_PRIMARY_MSG_POPUP = 2,
   URT_PRIMARY_MSG_VERSION = 3,
   URT_PRIMARY_MSG_SAFETY_MODE = 5,
   URT_PRIMARY_MSG_ERROR_CODE = 6,
@@ -131,6 +133,13 @@ int urt_primary_encode_text(uint64_t timestamp_us, int source, const char *text,
  * Returns the size, URT_EINVAL (title longer than 255 bytes) or URT_ENOSPC. */
 int urt_primary_encode_key(uint64_t timestamp_us, int source, int32_t code, int32_t argument,
                            const char *title, const char *text, uint8_t *buf, size_t cap);
+
+/* POPUP (type 2), what URScript's popup() shows on the pendant: request id and requested type
+ * (0, 0 for a script popup), the warning / error / blocking flags, title and text.
+ * Returns the size, URT_EINVAL (title longer than 255 bytes) or URT_ENOSPC. */
+int urt_primary_encode_popup(uint64_t timestamp_us, int source, uint32_t request_id,
+                             uint32_t requested_type, bool warning, bool error, bool blocking,
+                             const char *title, const char *text, uint8_t *buf, size_t cap);
 
 /* RUNTIME_EXCEPTION (type 10): script line and column, text such as
  * "compile_error_name_not_found:foo:". Returns the size or URT_ENOSPC. */

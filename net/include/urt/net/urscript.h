@@ -37,6 +37,7 @@ extern "C" {
 /* What the runner tells the primary interface (protocols.md §4.5 ROBOT_MESSAGE). */
 typedef enum urt_script_msg_kind {
   URT_SCRIPT_MSG_TEXT = 0,               /* robot_message_type 0: text                   */
+  URT_SCRIPT_MSG_POPUP = 2,              /* robot_message_type 2: title, text, flags       */
   URT_SCRIPT_MSG_KEY = 7,                /* robot_message_type 7: title + text            */
   URT_SCRIPT_MSG_RUNTIME_EXCEPTION = 10  /* robot_message_type 10: line, column, text      */
 } urt_script_msg_kind_t;
@@ -46,11 +47,12 @@ typedef struct urt_script_msg {
   int32_t kind;          /* urt_script_msg_kind_t                                         */
   int32_t code;          /* KEY: code (0)                                                  */
   int32_t argument;      /* KEY: argument (0)                                              */
+  uint8_t warning, error, blocking;  /* POPUP: its flags                                    */
   uint32_t line;         /* RUNTIME_EXCEPTION: 1-based line of the offending token          */
   uint32_t column;       /* RUNTIME_EXCEPTION: 1-based column of the offending token        */
   double time;           /* controller time when it was emitted [s]                        */
   char title[64];        /* KEY: "PROGRAM_XXX_STARTED", "PROGRAM_XXX_STOPPED",
-                            "SECONDARY_PROGRAM_EXCEPTION_XXX"                               */
+                            "SECONDARY_PROGRAM_EXCEPTION_XXX"; POPUP: its title             */
   char text[1024];       /* TEXT: the message; KEY: program name or error; EXCEPTION: text  */
 } urt_script_msg_t;
 
@@ -77,6 +79,9 @@ typedef struct urt_script_host {
   void (*write_output_register)(void *ctx, int kind, int index, double value);
   /* Nullable: the loaded robot model, for native programs' kinematics and dynamics getters. */
   const urt_model_t *(*model)(void *ctx);
+  /* Nullable: the snapshot of an earlier tick (get_actual_joint_positions_history); 0, or
+   * nonzero when the controller no longer keeps it (or has not published it yet). */
+  int (*snapshot_at)(void *ctx, uint64_t tick, urt_snapshot_t *out);
 } urt_script_host_t;
 
 enum { URT_SCRIPT_REG_INT = 0, URT_SCRIPT_REG_DOUBLE = 1, URT_SCRIPT_REG_BIT = 2 };
@@ -88,13 +93,18 @@ typedef struct urt_runner_config {
   int rt_priority;       /* > 0: SCHED_FIFO priority of the script thread (best effort): a
                             real controller runs the script in its own cycle, so a script
                             thread that wakes late would fall behind controller time     */
+  /* Hosts besides loopback (127.0.0.0/8, ::1, "localhost") that socket_open may dial, as
+   * written in the script (--script-allow-host); at most 16, copied. Nullable when 0. */
+  const char *const *allow_hosts;
+  int n_allow_hosts;
 } urt_runner_config_t;
 
 typedef struct urt_runner urt_runner_t;
 
 /* Create the runner and start its thread. The host is copied. Nullable: cfg.
  * Context: non-RT (allocates, starts a thread). Returns 0, URT_EINVAL (missing host
- * function) or URT_EIO (thread creation failed); *out untouched on failure. */
+ * function, more than 16 allowed hosts or one longer than 255 bytes) or URT_EIO (thread
+ * creation failed); *out untouched on failure. */
 int urt_runner_create(const urt_script_host_t *host, const urt_runner_config_t *cfg,
                       urt_runner_t **out);
 

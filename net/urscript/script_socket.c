@@ -1,0 +1,295 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * net/urscript/script_socket.c — the URScript socket table: host policy, non-blocking
+ * connects, receive buffers and sends (see script_socket.h).
+ */
+#include "script_socket.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+us_sockets *urt__us_sockets_new(const char *const *allow, int n) {
+  if (n < 0 || n > US_SOCK_MAX_ALLOW) {
+    return NULL;
+  }
+  us_sockets *t = calloc(1, sizeof *t);
+  if (!t) {
+    return NULL;
+  }
+  for (int k = 0; k < n; k++) {
+    if (!allow[k] || strlen(allow[k]) >= US_SOCK_HOST) {
+      free(t);
+      return NULL;
+    }
+    snprintf(t->allow[k], US_SOCK_HOST, "%s", allow[k]);
+  }
+  t->n_allow = n;
+  for (int k = 0; k < US_SOCK_MAX; k++) {
+    t->s[k].fd = -1;
+  }
+  return t;
+}
+
+void urt__us_sock_close(us_sock *s) {
+  if (!s || s->state == US_SOCK_FREE) {
+    return;
+  }
+  if (s->fd >= 0) {
+    close(s->fd);
+  }
+  s->fd = -1;
+  s->state = US_SOCK_FREE;
+  s->eof = s->broken = false;
+  s->rx_n = 0;
+  s->tx_n = 0;
+  s->name[0] = 0;
+}
+
+void urt__us_sockets_close_all(us_sockets *t) {
+  if (!t) {
+    return;
+  }
+  for (int k = 0; k < US_SOCK_MAX; k++) {
+    urt__us_sock_close(&t->s[k]);
+  }
+}
+
+void urt__us_sockets_free(us_sockets *t) {
+  urt__us_sockets_close_all(t);
+  free(t);
+}
+
+us_sock *urt__us_sock_find(us_sockets *t, const char *name) {
+  for (int k = 0; k < US_SOCK_MAX; k++) {
+    if (t->s[k].state != US_SOCK_FREE && strcmp(t->s[k].name, name) == 0) {
+      return &t->s[k];
+    }
+  }
+  return NULL;
+}
+
+//---- host policy ----
+
+static bool is_loopback(const struct sockaddr *sa) {
+  if (sa->sa_family == AF_INET) {
+    uint32_t a = ntohl(((const struct sockaddr_in *)sa)->sin_addr.s_addr);
+    return (a >> 24) == 127;
+  }
+  if (sa->sa_family == AF_INET6) {
+    return IN6_IS_ADDR_LOOPBACK(&((const struct sockaddr_in6 *)sa)->sin6_addr);
+  }
+  return false;
+}
+
+static bool is_allowed_name(const us_sockets *t, const char *host) {
+  for (int k = 0; k < t->n_allow; k++) {
+    if (strcasecmp(t->allow[k], host) == 0) {
+      return true;
+    }
+  }
+  return false;
+}
+
+/* host → address: literals without any lookup; "localhost" as 127.0.0.1; any other name only
+ * when allowed (then the resolver may block: it is the user's explicit choice). */
+static int resolve(const us_sockets *t, const char *host, int port, struct sockaddr_storage *out,
+                   socklen_t *len, char *text, size_t n) {
+  bool allowed = is_allowed_name(t, host);
+  const char *lookup = strcasecmp(host, "localhost") == 0 ? "127.0.0.1" : host;
+  struct addrinfo hints = {.ai_socktype = SOCK_STREAM, .ai_flags = AI_NUMERICHOST |
+                                                                   AI_NUMERICSERV};
+  char service[16];
+  snprintf(service, sizeof service, "%d", port);
+  struct addrinfo *ai = NULL;
+  int rc = getaddrinfo(lookup, service, &hints, &ai);
+  if (rc != 0 && allowed) {
+    hints.ai_flags = AI_NUMERICSERV;
+    rc = getaddrinfo(lookup, service, &hints, &ai);
+    if (rc != 0) {
+      snprintf(text, n, "socket_open: cannot resolve \"%s\": %s", host, gai_strerror(rc));
+      return US_SOCK_ERR_RESOLVE;
+    }
+  }
+  if (rc != 0 || (!allowed && !is_loopback(ai->ai_addr))) {
+    if (ai) freeaddrinfo(ai);
+    snprintf(text, n,
+             "socket_open: connections to \"%s\" are not allowed (urtwin dials loopback "
+             "addresses only; start it with --script-allow-host %s to allow this host)",
+             host, host);
+    return US_SOCK_ERR_HOST;
+  }
+  memcpy(out, ai->ai_addr, ai->ai_addrlen);
+  *len = ai->ai_addrlen;
+  freeaddrinfo(ai);
+  return US_SOCK_OK;
+}
+
+//---- connect ----
+
+int urt__us_sock_connect(us_sockets *t, const char *name, const char *host, int port,
+                         us_sock **out, char *text, size_t n) {
+  *out = NULL;
+  if (strlen(name) >= US_SOCK_NAME) {
+    snprintf(text, n, "socket_open: socket name longer than %d bytes", US_SOCK_NAME - 1);
+    return US_SOCK_ERR_ARG;
+  }
+  if (port < 1 || port > 65535) {
+    snprintf(text, n, "socket_open: port %d outside 1..65535", port);
+    return US_SOCK_ERR_ARG;
+  }
+  struct sockaddr_storage sa;
+  socklen_t len = 0;
+  int rc = resolve(t, host, port, &sa, &len, text, n);
+  if (rc != US_SOCK_OK) {
+    return rc;
+  }
+  // a name opened again replaces the old connection
+  urt__us_sock_close(urt__us_sock_find(t, name));
+  us_sock *s = NULL;
+  for (int k = 0; k < US_SOCK_MAX && !s; k++) {
+    if (t->s[k].state == US_SOCK_FREE) s = &t->s[k];
+  }
+  if (!s) {
+    snprintf(text, n, "socket_open: more than %d sockets open", US_SOCK_MAX);
+    return US_SOCK_ERR_FULL;
+  }
+  int fd = socket(sa.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) {
+    snprintf(text, n, "socket_open: socket: %s", strerror(errno));
+    return US_SOCK_ERR_CONNECT;
+  }
+  int one = 1;
+  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+  s->eof = s->broken = false;
+  s->rx_n = s->tx_n = 0;
+  s->fd = fd;
+  snprintf(s->name, sizeof s->name, "%s", name);
+  if (connect(fd, (const struct sockaddr *)&sa, len) == 0) {
+    s->state = US_SOCK_OPEN;
+  } else if (errno == EINPROGRESS) {
+    s->state = US_SOCK_CONNECTING;
+  } else {
+    snprintf(text, n, "socket_open: %s:%d: %s", host, port, strerror(errno));
+    close(fd);
+    s->fd = -1;
+    s->name[0] = 0;
+    return US_SOCK_ERR_CONNECT;
+  }
+  *out = s;
+  return US_SOCK_OK;
+}
+
+int urt__us_sock_poll_connect(us_sock *s) {
+  if (s->state == US_SOCK_OPEN) {
+    return 1;
+  }
+  if (s->state != US_SOCK_CONNECTING) {
+    return -1;
+  }
+  struct pollfd p = {.fd = s->fd, .events = POLLOUT};
+  int rc = poll(&p, 1, 0);
+  if (rc == 0) {
+    return 0;
+  }
+  int err = 0;
+  socklen_t len = sizeof err;
+  if (rc < 0 || getsockopt(s->fd, SOL_SOCKET, SO_ERROR, &err, &len) != 0 || err != 0) {
+    urt__us_sock_close(s);
+    return -1;
+  }
+  s->state = US_SOCK_OPEN;
+  return 1;
+}
+
+//---- data ----
+
+static void flush_tx(us_sock *s) {
+  while (s->tx_n > 0) {
+    ssize_t k = send(s->fd, s->tx, s->tx_n, MSG_DONTWAIT | MSG_NOSIGNAL);
+    if (k <= 0) {
+      if (k < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+        s->broken = true;
+        s->tx_n = 0;
+      }
+      return;
+    }
+    memmove(s->tx, s->tx + k, s->tx_n - (size_t)k);
+    s->tx_n -= (size_t)k;
+  }
+}
+
+void urt__us_sock_fill(us_sock *s) {
+  if (s->state != US_SOCK_OPEN) {
+    return;
+  }
+  flush_tx(s);
+  while (!s->eof && s->rx_n < sizeof s->rx) {
+    ssize_t k = recv(s->fd, s->rx + s->rx_n, sizeof s->rx - s->rx_n, MSG_DONTWAIT);
+    if (k > 0) {
+      s->rx_n += (size_t)k;
+    } else if (k == 0) {
+      s->eof = true;
+    } else if (errno == EINTR) {
+      continue;
+    } else {
+      if (errno != EAGAIN && errno != EWOULDBLOCK) s->eof = true;
+      break;
+    }
+  }
+}
+
+void urt__us_sock_consume(us_sock *s, size_t n) {
+  if (n >= s->rx_n) {
+    s->rx_n = 0;
+    return;
+  }
+  memmove(s->rx, s->rx + n, s->rx_n - n);
+  s->rx_n -= n;
+}
+
+bool urt__us_sock_send(us_sock *s, const void *buf, size_t n) {
+  if (!s || s->state != US_SOCK_OPEN || s->broken) {
+    return false;
+  }
+  flush_tx(s);
+  if (s->tx_n > 0) {
+    // an earlier write is still in flight: queue behind it, never interleave
+    if (s->tx_n + n > sizeof s->tx) return false;
+    memcpy(s->tx + s->tx_n, buf, n);
+    s->tx_n += n;
+    return true;
+  }
+  ssize_t k = send(s->fd, buf, n, MSG_DONTWAIT | MSG_NOSIGNAL);
+  if (k < 0) {
+    if (errno != EAGAIN && errno != EWOULDBLOCK) {
+      s->broken = true;
+      return false;
+    }
+    k = 0;
+  }
+  size_t rest = n - (size_t)k;
+  if (rest == 0) {
+    return true;
+  }
+  if (k == 0 && rest > sizeof s->tx) {
+    return false;
+  }
+  if (rest > sizeof s->tx) {
+    // part went out and the rest does not fit: the stream is broken from here on
+    s->broken = true;
+    return false;
+  }
+  memcpy(s->tx, (const uint8_t *)buf + k, rest);
+  s->tx_n = rest;
+  return true;
+}

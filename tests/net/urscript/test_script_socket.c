@@ -1,0 +1,290 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * tests/net/urscript/test_script_socket.c — the URScript socket builtins against a scripted
+ * peer on 127.0.0.1 (socket_fixture.h) and a fake controller: each read with its data arriving
+ * in parts over several ticks, timeouts counted in ticks, a peer that closes, sends as the
+ * peer receives them, a refused host. */
+#define _GNU_SOURCE
+#include <math.h>
+#include <netinet/tcp.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "fake_host.h"
+#include "script.h"
+#include "socket_fixture.h"
+#include "test_support.h"
+
+static fake_host F;
+static urt_script_host_t H;
+static fixture X;
+static us_sockets *T;
+static us_err E;
+static uint64_t motion_id;
+
+static uint64_t wait_tick_with_peer(void *ctx, uint64_t after, int timeout_ms) {
+  uint64_t t = fake_wait_tick(ctx, after, timeout_ms);
+  fix_tick(&X, t);
+  return t;
+}
+
+static int setup(void **state) {
+  fake_init(&F, &H);
+  H.wait_tick = wait_tick_with_peer;
+  assert_int_equal(fix_listen(&X), 0);
+  T = urt__us_sockets_new(NULL, 0);
+  assert_non_null(T);
+  X.table = T;
+  memset(&E, 0, sizeof E);
+  return 0;
+}
+
+static int teardown(void **state) {
+  urt__us_sockets_free(T);
+  fix_close(&X);
+  return 0;
+}
+
+/* run a program whose text has %d for the fixture's port; returns urt__us_run's result */
+static int run(const char *fmt) {
+  char text[4096];
+  snprintf(text, sizeof text, fmt, X.port);
+  us_prog *p = NULL;
+  if (urt__us_parse(text, strlen(text), &p, &E) != 0) {
+    fail_msg("parse: %u:%u %s", E.line, E.column, E.text);
+  }
+  us_hooks h = {.host = &H, .sockets = T, .motion_id = &motion_id, .step_budget = 100000,
+                .wait_timeout_ms = 1};
+  int rc = urt__us_run(p, &h, &E);
+  urt__us_prog_free(p);
+  fix_drain(&X);
+  return rc;
+}
+
+static void must_run(const char *fmt) {
+  if (run(fmt) != 0) fail_msg("run: %u:%u %s", E.line, E.column, E.text);
+}
+
+/* message k is text at tick (the fake's time is tick × 2 ms) */
+static void assert_msg(int k, const char *text, uint64_t tick) {
+  if (k >= F.n_msg) fail_msg("message %d of %d", k, F.n_msg);
+  assert_string_equal(F.msg[k].text, text);
+  if (fabs(F.msg[k].time - (double)tick * 0.002) > 1e-9) {
+    fail_msg("message %d (%s) at tick %.0f, expected %llu", k, text, F.msg[k].time / 0.002,
+             (unsigned long long)tick);
+  }
+}
+
+static void test_socket__binary_integers_in_parts_over_ticks(void **state) {
+  // 3 big-endian int32s split 3 + 6 + 3 bytes at ticks 10, 20, 30: the read completes at 30
+  static const char rec[] = "\x00\x00\x01\x02" "\xff\xff\xff\xfb" "\x7f\xff\xff\xff";
+  fix_at(&X, 10, rec, 3);
+  fix_at(&X, 20, rec + 3, 6);
+  fix_at(&X, 30, rec + 9, 3);
+  must_run("ok = socket_open(\"127.0.0.1\", %d, \"s\")\n"
+           "textmsg(ok)\n"
+           "r = socket_read_binary_integer(3, \"s\", 1.0)\n"
+           "textmsg(r)\n"
+           "textmsg(r[1] + r[2])\n");
+  assert_string_equal(F.msg[0].text, "True");
+  assert_msg(1, "[3,258,-5,2147483647]", 30);
+  assert_msg(2, "253", 30);
+}
+
+static void test_socket__timeout_counts_ticks_and_keeps_a_partial_record(void **state) {
+  // 2 of 4 bytes come: the read times out after 0.1 s = 50 ticks; the rest completes the next
+  fix_at(&X, 5, "\x00\x00", 2);
+  fix_at(&X, 100, "\x00\x07", 2);
+  must_run("socket_open(\"127.0.0.1\", %d, \"s\")\n"
+           "textmsg(socket_read_binary_integer(1, \"s\", 0.1))\n"
+           "textmsg(socket_read_binary_integer(1, \"s\", 0))\n");
+  assert_msg(0, "[0,-1]", 50);
+  assert_msg(1, "[1,7]", 100);  // timeout 0: waits for ever (until the data comes)
+}
+
+static void test_socket__byte_list_and_default_socket_name(void **state) {
+  fix_at(&X, 3, "\x01\xfe", 2);
+  fix_at(&X, 7, "\x80", 1);
+  must_run("socket_open(\"localhost\", %d)\n"
+           "textmsg(socket_read_byte_list(3))\n"
+           "textmsg(socket_read_byte_list(2, timeout=0.01))\n");
+  assert_msg(0, "[3,1,254,128]", 7);
+  assert_msg(1, "[0,-1,-1]", 12);  // 0.01 s = 5 ticks
+}
+
+static void test_socket__ascii_floats_in_parts(void **state) {
+  fix_at(&X, 4, "junk( 1.5, -2", 13);
+  fix_at(&X, 9, "5e-1 , 3)(1,2)", 14);
+  must_run("socket_open(\"127.0.0.1\", %d, \"f\")\n"
+           "textmsg(socket_read_ascii_float(3, \"f\"))\n"
+           "textmsg(socket_read_ascii_float(3, \"f\", 0.01))\n"
+           "textmsg(socket_read_ascii_float(1, \"f\", 0.01))\n");
+  assert_msg(0, "[3,1.5,-2.5,3]", 9);
+  assert_msg(1, "[2,1,2,nan]", 9);   // fewer numbers than asked: the count says how many
+  assert_msg(2, "[0,nan]", 14);      // nothing more: timeout after 5 ticks
+}
+
+static void test_socket__ascii_floats_invalid_reply(void **state) {
+  fix_at(&X, 2, "(1, x, 3)", 9);
+  must_run("socket_open(\"127.0.0.1\", %d)\n"
+           "textmsg(socket_read_ascii_float(3))\n");
+  assert_msg(0, "[0,nan,nan,nan]", 2);
+}
+
+static void test_socket__lines_in_parts(void **state) {
+  fix_at(&X, 6, "hel", 3);
+  fix_at(&X, 12, "lo\r\nworld\nre", 12);
+  must_run("socket_open(\"127.0.0.1\", %d, \"l\")\n"
+           "textmsg(socket_read_line(\"l\"))\n"
+           "textmsg(socket_read_line(\"l\"))\n"
+           "x = socket_read_line(\"l\", timeout=0.02)\n"
+           "textmsg(str_len(x))\n");
+  assert_msg(0, "hello", 12);
+  assert_msg(1, "world", 12);
+  assert_msg(2, "0", 22);  // "re" has no newline: "" after 10 ticks
+}
+
+static void test_socket__strings_with_prefix_and_suffix(void **state) {
+  // UR's example: ">hello<>world<" read with prefix ">" and suffix "<"
+  fix_at(&X, 5, "xx>hel", 6);
+  fix_at(&X, 10, "lo<>wor", 7);
+  fix_at(&X, 15, "ld<tail", 7);
+  must_run("socket_open(\"127.0.0.1\", %d, \"t\")\n"
+           "textmsg(socket_read_string(\"t\", prefix=\">\", suffix=\"<\"))\n"
+           "textmsg(socket_read_string(\"t\", prefix=\">\", suffix=\"<\"))\n"
+           "textmsg(socket_read_string(\"t\"))\n");
+  assert_msg(0, "hello", 10);
+  assert_msg(1, "world", 15);
+  assert_msg(2, "tail", 15);  // no prefix or suffix: everything there is
+}
+
+static void test_socket__string_suffix_with_interpret_escape(void **state) {
+  fix_at(&X, 5, "a b\nc\\n", 7);
+  must_run("socket_open(\"127.0.0.1\", %d)\n"
+           "textmsg(socket_read_string(suffix=\"\\\\n\", interpret_escape=True))\n"
+           "textmsg(socket_read_string(suffix=\"\\\\n\"))\n");
+  // escapes on: the suffix is a newline; off: the two characters backslash and n
+  assert_msg(0, "a b", 5);
+  assert_msg(1, "c", 5);
+}
+
+static void test_socket__peer_that_closes_fails_reads_at_once(void **state) {
+  fix_at(&X, 4, "\x00\x00\x00\x09\x00", 5);
+  fix_at(&X, 8, NULL, 0);
+  must_run("socket_open(\"127.0.0.1\", %d)\n"
+           "textmsg(socket_read_binary_integer(1, timeout=10))\n"
+           "textmsg(socket_read_binary_integer(1, timeout=10))\n"
+           "textmsg(socket_send_int(1))\n"
+           "textmsg(socket_read_line(timeout=10))\n");
+  assert_msg(0, "[1,9]", 4);
+  assert_msg(1, "[0,-1]", 8);  // one byte was left: the close ends the read, no timeout
+  assert_msg(3, "", 8);
+}
+
+static void test_socket__sends_reach_the_peer(void **state) {
+  must_run("socket_open(\"127.0.0.1\", %d, \"o\")\n"
+           "socket_send_int(-2, \"o\")\n"
+           "socket_send_byte(10, \"o\")\n"
+           "socket_send_string(\"ab\", \"o\")\n"
+           "socket_send_line(\"cd\", \"o\")\n"
+           "socket_send_string(p[1, 0, 0, 0, 0, 0.5], \"o\")\n"
+           "socket_set_var(\"POS\", 7, \"o\")\n"
+           "textmsg(socket_send_int(1, \"nope\"))\n"
+           "sync()\n");
+  static const char want[] = "\xff\xff\xff\xfe\nabcd\np[1,0,0,0,0,0.5]SET POS 7\n";
+  assert_int_equal(X.n_got, sizeof want - 1);
+  assert_memory_equal(X.got, want, sizeof want - 1);
+  assert_msg(0, "False", 0);  // a socket that is not open: False
+}
+
+static void test_socket__get_var_round_trip(void **state) {
+  fix_at(&X, 10, "PRE 77\n", 7);
+  fix_at(&X, 1100, "LATE 1\n", 7);
+  must_run("socket_open(\"127.0.0.1\", %d, \"g\")\n"
+           "textmsg(socket_get_var(\"PRE\", \"g\"))\n"
+           "textmsg(socket_get_var(\"LATE\", \"g\"))\n");
+  assert_string_equal(X.got, "GET PRE\nGET LATE\n");
+  assert_msg(0, "77", 10);
+  assert_msg(1, "0", 1010);  // no answer within 2 s = 1000 ticks: 0
+}
+
+static void test_socket__sends_have_nodelay(void **state) {
+  // URCL acts only on a recv() of exactly 4 bytes: each socket_send_int is its own segment
+  must_run("socket_open(\"127.0.0.1\", %d, \"n\")\n");
+  int fd = fix_client_fd(&X), on = 0;
+  socklen_t len = sizeof on;
+  assert_true(fd >= 0);
+  assert_int_equal(getsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, &len), 0);
+  assert_true(on != 0);
+}
+
+static void test_socket__open_refused_port_is_false(void **state) {
+  char text[256];
+  snprintf(text, sizeof text, "textmsg(socket_open(\"127.0.0.1\", %d, \"r\", 0.1))\n",
+           fix_dead_port());
+  must_run(text);
+  assert_string_equal(F.msg[0].text, "False");
+}
+
+static void test_socket__open_non_loopback_host_is_a_runtime_error(void **state) {
+  // refused before anything is dialled: no packet leaves 127.0.0.0/8
+  assert_int_not_equal(run("socket_open(\"10.20.30.40\", %d)\n"), 0);
+  assert_int_equal(E.kind, US_ERR_RUNTIME);
+  assert_non_null(strstr(E.text, "\"10.20.30.40\""));
+  assert_non_null(strstr(E.text, "--script-allow-host"));
+  memset(&E, 0, sizeof E);
+  // a name is never looked up unless allowed
+  assert_int_not_equal(run("socket_open(\"robot.example.invalid\", %d)\n"), 0);
+  assert_non_null(strstr(E.text, "robot.example.invalid"));
+}
+
+static void test_socket__reopen_and_close(void **state) {
+  must_run("a = socket_open(\"127.0.0.1\", %d, \"s\")\n"
+           "socket_close(\"s\")\n"
+           "textmsg(socket_send_int(1, \"s\"))\n"
+           "socket_close(\"never_opened\")\n");
+  assert_msg(0, "False", 0);
+}
+
+static void test_socket__bad_arguments_are_runtime_errors(void **state) {
+  assert_int_not_equal(run("socket_read_binary_integer(31)\n"), 0);
+  assert_non_null(strstr(E.text, "outside 1..30"));
+  memset(&E, 0, sizeof E);
+  assert_int_not_equal(run("socket_send_byte(256)\n"), 0);
+  assert_non_null(strstr(E.text, "not a byte"));
+  memset(&E, 0, sizeof E);
+  assert_int_not_equal(run("socket_open(\"127.0.0.1\", \"%d\")\n"), 0);
+  assert_int_equal(E.kind, US_ERR_RUNTIME);
+}
+
+static void test_socket__no_table_is_a_runtime_error(void **state) {
+  us_prog *p = NULL;
+  const char *text = "socket_close()\n";
+  assert_int_equal(urt__us_parse(text, strlen(text), &p, &E), 0);
+  us_hooks h = {.host = &H, .motion_id = &motion_id, .step_budget = 1000, .wait_timeout_ms = 1};
+  assert_int_not_equal(urt__us_run(p, &h, &E), 0);
+  assert_non_null(strstr(E.text, "sockets are not available"));
+  urt__us_prog_free(p);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test_setup_teardown(test_socket__binary_integers_in_parts_over_ticks, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__timeout_counts_ticks_and_keeps_a_partial_record, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__byte_list_and_default_socket_name, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__ascii_floats_in_parts, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__ascii_floats_invalid_reply, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__lines_in_parts, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__strings_with_prefix_and_suffix, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__string_suffix_with_interpret_escape, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__peer_that_closes_fails_reads_at_once, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__sends_reach_the_peer, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__get_var_round_trip, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__sends_have_nodelay, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__open_refused_port_is_false, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__open_non_loopback_host_is_a_runtime_error, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__reopen_and_close, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__bad_arguments_are_runtime_errors, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__no_table_is_a_runtime_error, setup, teardown),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
