@@ -9,7 +9,9 @@
  * short; here the reply is read until the server has been quiet for the read timeout or closes.
  * The whole exchange is bounded (total_timeout_ms, FETCH_MAX bytes) and cancellable.
  */
+#ifndef _GNU_SOURCE
 #define _GNU_SOURCE
+#endif
 #include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>

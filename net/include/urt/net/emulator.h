@@ -30,6 +30,11 @@ typedef struct urt_emulator_config {
   const char *serial_number; /* digits; NULL: "20235501783"                            */
   int rt_priority;           /* > 0: SCHED_FIFO priority of the I/O and script threads
                                 (best effort)                                              */
+  /* Where a played program's External Control node fetches its program (the URCap's
+     installation: host IP and port). NULL / 0: 127.0.0.1 / 50002. Loopback only: create
+     refuses any other host. */
+  const char *external_control_host;
+  int external_control_port;
 } urt_emulator_config_t;
 
 /* Per-port counters (readable while running, approximately). */

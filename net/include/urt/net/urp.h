@@ -19,8 +19,10 @@
 #ifndef URT_NET_URP_H
 #define URT_NET_URP_H
 
-#include <stdatomic.h>
 #include <stddef.h>
+#ifndef __cplusplus
+#include <stdatomic.h>
+#endif
 
 #ifdef __cplusplus
 extern "C" {
@@ -76,7 +78,11 @@ typedef struct urt_urcap_config {
   int connect_timeout_ms;    /* <= 0: 5000 (the URCap's)                                 */
   int read_timeout_ms;       /* <= 0: 500 (the URCap's socket timeout)                   */
   int total_timeout_ms;      /* <= 0: 10000: the whole exchange, however slowly it trickles */
+#ifndef __cplusplus
   const _Atomic int *cancel; /* nonzero: give up at the next 50 ms step. Nullable.       */
+#else
+  const void *cancel;        /* (C only: an _Atomic int)                                 */
+#endif
 } urt_urcap_config_t;
 
 /* Is host an IPv4 literal in 127.0.0.0/8, or "localhost"? */
