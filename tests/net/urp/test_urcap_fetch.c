@@ -135,6 +135,41 @@ static void test_split_without_markers(void **state) {
   free(body);
 }
 
+// URCL's own script (the text its ScriptSender sends, before rendering): the header is its
+// first 1046 lines, the body starts at the control loop.
+static void test_split_urcl_script(void **state) {
+  (void)state;
+  char path[1024];
+  FILE *f = NULL;
+  const char *roots[] = {"/../shared", "/../../shared"};
+  for (int k = 0; k < 2 && !f; k++) {
+    snprintf(path, sizeof path,
+             "%s%s/clients/Universal_Robots_Client_Library-2.14.0/resources/"
+             "external_control.urscript",
+             URT_SOURCE_DIR, roots[k]);
+    f = fopen(path, "rb");
+  }
+  if (!f) {
+    print_message("SKIP: ../shared (URCL 2.14.0's external_control.urscript) is absent\n");
+    skip();
+  }
+  static char text[1 << 20];
+  size_t len = fread(text, 1, sizeof text - 1, f);
+  fclose(f);
+  char *header, *body;
+  assert_int_equal(urt_urcap_split(text, len, &header, &body), 0);
+  assert_int_equal(strncmp(header, "# HEADER_BEGIN\n", 15), 0);
+  size_t hl = strlen(header), lines = 0;
+  for (size_t k = 0; k < hl; k++) lines += header[k] == '\n';
+  assert_int_equal(lines, 1046);
+  assert_int_equal(strcmp(header + hl - 13, "# HEADER_END\n"), 0);
+  assert_non_null(strstr(body, "# NODE_CONTROL_LOOP_BEGINS\n"));
+  assert_null(strstr(body, "# HEADER_END"));
+  assert_int_equal(hl + strlen(body), len + (text[len - 1] == '\n' ? 0 : 1));
+  free(header);
+  free(body);
+}
+
 static void test_timeout_popup(void **state) {
   (void)state;
   // the server accepts and reads but never answers
@@ -231,6 +266,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_fetch_and_split),
       cmocka_unit_test(test_split_without_markers),
+      cmocka_unit_test(test_split_urcl_script),
       cmocka_unit_test(test_timeout_popup),
       cmocka_unit_test(test_connection_refused_popup),
       cmocka_unit_test(test_loopback_only),
