@@ -13,6 +13,7 @@
 #define _GNU_SOURCE
 #endif
 #include <arpa/inet.h>
+#include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -47,8 +48,18 @@ int urt_urcap_host_is_loopback(const char *host) {
   return inet_pton(AF_INET, host, &a) == 1 && (ntohl(a.s_addr) >> 24) == 127;
 }
 
-/* The URCap's popup text for a failed fetch, then sync(). */
-static char *failure(const urt_urcap_config_t *cfg, int timeout, const char *reason, size_t *len) {
+/* The URCap's popup text for a failed fetch, then sync(). The host goes into a string
+ * literal: anything but an address's characters is shown as '?'. */
+static char *failure(const urt_urcap_config_t *in, int timeout, const char *reason, size_t *len) {
+  char host[64];
+  size_t n = 0;
+  for (const char *s = in->host; *s && n < sizeof host - 1; s++, n++) {
+    host[n] = (isalnum((unsigned char)*s) || *s == '.' || *s == '-' || *s == ':') ? *s : '?';
+  }
+  host[n] = '\0';
+  urt_urcap_config_t c = *in;
+  c.host = host;
+  const urt_urcap_config_t *cfg = &c;
   urp_text t = {0};
   if (timeout) {
     urp_text_printf(&t, "popup(\"Timeout while reading requested program from %s:%d\",",
