@@ -78,6 +78,7 @@ struct urt_emulator {
   bool fetch_started;            /* fetch_thread must be joined                    */
   _Atomic int fetch_busy;        /* the thread is fetching (a play then waits)     */
   _Atomic int fetch_cancel;      /* a stop or load: drop what the thread fetched   */
+  bool fetch_replay;             /* a play came while a cancelled fetch wound down */
   pthread_mutex_t fetch_lock;    /* cancel vs. the thread's submit                 */
 
   /* runner → I/O thread */
@@ -138,6 +139,8 @@ void urt__send_to(urt_emulator_t *e, bool (*want)(int kind), const uint8_t *buf,
 int urt__program_prepare(void *user, const char *host_path, char *why, size_t why_sz);
 void urt__program_play(urt_emulator_t *e);
 void urt__program_cancel(urt_emulator_t *e);
+void urt__program_tick(urt_emulator_t *e);
+int urt__program_state(urt_emulator_t *e, int snapshot_state);  /* PLAYING while fetching */  /* per tick: a play held back by a winding-down fetch */
 void urt__program_shutdown(urt_emulator_t *e);
 
 /* Controller time of the newest snapshot [µs]. */

@@ -76,6 +76,7 @@ static bool dashboard_input(urt_emulator_t *e, urt__client_t *c, const uint8_t *
     urt_loop_read_latest(e->loop, &s);
     urt_dashboard_robot_t robot;
     urt_dashboard_robot_from_snapshot(&s, &robot);
+    robot.program_state = urt__program_state(e, robot.program_state);
     robot.pstop_age = e->pstop_since >= 0 ? s.time - e->pstop_since : -1.0;
     urt_dashboard_action_t action;
     size_t len = urt_dashboard_handle(&e->dash_ctx, &robot, &e->dash, &line, reply, sizeof reply,
@@ -96,8 +97,10 @@ static void dashboard_close(urt_emulator_t *e, urt__client_t *c) {
 const urt__port_ops_t urt__port_dashboard_ops = {.open = dashboard_open, .input = dashboard_input,
                                                  .close = dashboard_close};
 
-// Remember when a protective stop began (the dashboard refuses to unlock it for 5 s).
+// Per tick: start a play held back by a winding-down fetch, and remember when a protective
+// stop began (the dashboard refuses to unlock it for 5 s).
 void urt__dashboard_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
+  urt__program_tick(e);
   if (s->safety_mode == URT_SAFETY_MODE_PROTECTIVE_STOP) {
     if (e->pstop_since < 0) {
       e->pstop_since = s->time;

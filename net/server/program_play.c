@@ -120,7 +120,10 @@ static void play_urp(urt_emulator_t *e) {
     return;
   }
   if (atomic_load(&e->fetch_busy)) {
-    return;  // this program is already on its way to the runner
+    // on its way to the runner already; or a stopped fetch still winding down: play once it
+    // has (urt__program_tick), so that stop-then-play never loses the play
+    e->fetch_replay = atomic_load(&e->fetch_cancel) != 0;
+    return;
   }
   join_fetch(e);  // a finished one
   fetch_job *job = calloc(1, sizeof *job);
@@ -159,7 +162,27 @@ void urt__program_play(urt_emulator_t *e) {
   }
 }
 
+void urt__program_tick(urt_emulator_t *e) {
+  if (e->fetch_replay && !atomic_load(&e->fetch_busy)) {
+    e->fetch_replay = false;
+    if (e->urp) {
+      play_urp(e);
+    }
+  }
+}
+
+int urt__program_state(urt_emulator_t *e, int snapshot_state) {
+  // a program whose External Control fetch is under way is starting: to the dashboard it
+  // plays (a real controller answers `play` once it has started), so `stop` reaches it
+  if (snapshot_state == URT_PROGRAM_STOPPED && atomic_load(&e->fetch_busy) &&
+      !atomic_load(&e->fetch_cancel)) {
+    return URT_PROGRAM_PLAYING;
+  }
+  return snapshot_state;
+}
+
 void urt__program_cancel(urt_emulator_t *e) {
+  e->fetch_replay = false;
   pthread_mutex_lock(&e->fetch_lock);
   atomic_store(&e->fetch_cancel, 1);
   pthread_mutex_unlock(&e->fetch_lock);
