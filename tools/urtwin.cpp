@@ -23,6 +23,7 @@
 #include "urt/loop.h"
 #include "urt/net/emulator.h"
 #include "urt/net/lcm_bridge.h"
+#include "urt/net/urp.h"
 #include "urt/net/version.h"
 
 namespace {
@@ -50,9 +51,26 @@ struct Options {
   bool local_control = false;
   std::string programs_dir = "programs";
   std::string serial_number = "20235501783";
+  std::string external_control_host = "127.0.0.1:50002";  // the URCap's host IP and port
   double stats_every = 10.0;    // seconds between loop statistics lines (0: never)
   std::vector<std::string> script_allow_hosts;
 };
+
+// "127.0.0.1:50002" → host, port (1…65535).
+int parse_host_port(const std::string& text, std::string* host, int* port) {
+  size_t colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0) {
+    return -1;
+  }
+  char* end = nullptr;
+  long p = std::strtol(text.c_str() + colon + 1, &end, 10);
+  if (end == text.c_str() + colon + 1 || *end != '\0' || p < 1 || p > 65535) {
+    return -1;
+  }
+  *host = text.substr(0, colon);
+  *port = static_cast<int>(p);
+  return 0;
+}
 
 int parse_q0(const std::string& text, double q[URT_NJ]) {
   std::vector<double> v;
@@ -145,6 +163,16 @@ int main(int argc, char** argv) {
   app.add_option("--script-allow-host", o.script_allow_hosts,
                  "a host besides loopback that URScript's socket_open may dial, as the script "
                  "writes it (repeatable, at most 16)");
+  app.add_option("--external-control-host", o.external_control_host,
+                 "HOST:PORT an External Control node fetches its program from (request_program, "
+                 "as the URCap does); loopback addresses only")
+      ->check([](const std::string& s) {
+        std::string host;
+        int port = 0;
+        return parse_host_port(s, &host, &port) == 0 ? std::string()
+                                                     : std::string("expected IPv4:PORT");
+      })
+      ->capture_default_str();
   app.add_option("--stats-every", o.stats_every, "seconds between loop statistics lines (0: never)")
       ->capture_default_str();
   try {
@@ -191,6 +219,18 @@ int main(int argc, char** argv) {
   }
   overrides.push_back(nullptr);
 
+  // an emulator dials loopback only (an External Control node's fetch included)
+  std::string ec_host;
+  int ec_port = 0;
+  parse_host_port(o.external_control_host, &ec_host, &ec_port);
+  if (!urt_urcap_host_is_loopback(ec_host.c_str())) {
+    std::fprintf(stderr,
+                 "urtwin: --external-control-host %s: not a loopback address; urtwin only "
+                 "connects to 127.0.0.0/8\n",
+                 o.external_control_host.c_str());
+    return 2;
+  }
+
   urt_model_t* m = nullptr;
   char err[512];
   if (urt_model_load(o.config.c_str(), overrides.data(), &m, err, sizeof err) != 0) {
@@ -223,6 +263,8 @@ int main(int argc, char** argv) {
   ec.programs_dir = o.programs_dir.c_str();
   ec.local_control = o.local_control;
   ec.serial_number = o.serial_number.c_str();
+  ec.external_control_host = ec_host.c_str();
+  ec.external_control_port = ec_port;
   ec.rt_priority = o.rt_priority > 1 ? o.rt_priority - 1 : 0;  // just below the physics
   std::vector<const char*> allow_hosts;
   for (const auto& h : o.script_allow_hosts) {

@@ -303,6 +303,18 @@ static void cmd_load(const call_t *c) {
     put_n(c->w, c->arg, c->arg_len);
     return;
   }
+  // the owner compiles it (a .urp); UR's failure reply, then why, e.g. the unsupported node
+  char why[256] = "";
+  if (c->ctx->prepare_program &&
+      c->ctx->prepare_program(c->ctx->prepare_user, host, why, sizeof why) != 0) {
+    put(c->w, "Error while loading program: ");
+    put_n(c->w, c->arg, c->arg_len);
+    if (why[0]) {
+      put(c->w, ": ");
+      put(c->w, why);
+    }
+    return;
+  }
   strcpy(c->st->program_display, display);
   strcpy(c->st->program_path, host);
   c->st->program_loaded = 1;

@@ -310,9 +310,24 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   }
   e->dash_ctx.programs_alias = "/programs";  // what a real controller shows
   e->dash_ctx.program_exts = ".urp,.script";
+  e->dash_ctx.prepare_program = urt__program_prepare;  // `load` compiles a .urp
+  e->dash_ctx.prepare_user = e;
+  pthread_mutex_init(&e->fetch_lock, NULL);
+  snprintf(e->ec_host, sizeof e->ec_host, "%s",
+           cfg->external_control_host ? cfg->external_control_host : "127.0.0.1");
+  e->ec_port = cfg->external_control_port > 0 ? cfg->external_control_port : 50002;
+  e->cfg.external_control_host = e->ec_host;
+  e->cfg.external_control_port = e->ec_port;
   urt_dashboard_state_init(&e->dash);
   e->dash.remote_control = !cfg->local_control;
 
+  if (!urt_urcap_host_is_loopback(e->ec_host) || e->ec_port > 65535) {
+    snprintf(err, err_sz,
+             "external control host %s:%d: only loopback addresses (127.0.0.0/8) are allowed",
+             e->ec_host, e->ec_port);
+    urt_emulator_destroy(e);
+    return URT_EINVAL;
+  }
   e->producer = urt_loop_add_producer(loop, "tcp");
   e->runner_producer = urt_loop_add_producer(loop, "urscript");
   if (e->producer < 0 || e->runner_producer < 0) {
@@ -388,6 +403,7 @@ void urt_emulator_destroy(urt_emulator_t *e) {
   }
   urt_emulator_stop(e);
   urt_loop_set_notify_fd(e->loop, -1);  // returns once the loop is done with tick_fd
+  urt__program_shutdown(e);  // its fetch thread submits to the runner: before the runner goes
   urt_runner_destroy(e->runner);
   while (e->clients) {
     close_client(e, e->clients);
@@ -402,6 +418,7 @@ void urt_emulator_destroy(urt_emulator_t *e) {
   if (e->msg_fd >= 0) close(e->msg_fd);
   pthread_mutex_destroy(&e->msg_lock);
   pthread_mutex_destroy(&e->reg_lock);
+  pthread_mutex_destroy(&e->fetch_lock);
   free(e);
 }
 

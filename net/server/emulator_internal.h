@@ -17,6 +17,7 @@
 #include "urt/net/primary.h"
 #include "urt/net/rtde.h"
 #include "urt/net/tcp.h"
+#include "urt/net/urp.h"
 #include "urt/net/urscript.h"
 
 /* What each port does (protocols.md §0.2). */
@@ -68,6 +69,18 @@ struct urt_emulator {
   urt_dashboard_state_t dash;
   double pstop_since;            /* controller time the protective stop began, < 0: none */
 
+  /* the loaded program (program_play.c): a compiled .urp, or NULL for a URScript file; and
+   * the thread that fetches an External Control node's program before playing it */
+  urt_urp_program_t *urp;
+  char ec_host[64];
+  int ec_port;
+  pthread_t fetch_thread;
+  bool fetch_started;            /* fetch_thread must be joined                    */
+  _Atomic int fetch_busy;        /* the thread is fetching (a play then waits)     */
+  _Atomic int fetch_cancel;      /* a stop or load: drop what the thread fetched   */
+  bool fetch_replay;             /* a play came while a cancelled fetch wound down */
+  pthread_mutex_t fetch_lock;    /* cancel vs. the thread's submit                 */
+
   /* runner → I/O thread */
   pthread_mutex_t msg_lock;
   urt_script_msg_t msg_queue[MSG_QUEUE];
@@ -118,6 +131,17 @@ void urt__submit_kind(urt_emulator_t *e, int kind);
 /* Send one message to every client of the ports for which want(kind) is true. */
 void urt__send_to(urt_emulator_t *e, bool (*want)(int kind), const uint8_t *buf, size_t len,
                   _Atomic uint64_t *sent, _Atomic uint64_t *dropped);
+
+/* Programs of the dashboard (program_play.c): `load` compiles a .urp (the dashboard's
+ * prepare hook), `play` runs the loaded program (a URScript file as it is, a .urp rendered,
+ * fetching an External Control node's program on its own thread), a stop or load cancels a
+ * fetch in flight, and destroy joins it. */
+int urt__program_prepare(void *user, const char *host_path, char *why, size_t why_sz);
+void urt__program_play(urt_emulator_t *e);
+void urt__program_cancel(urt_emulator_t *e);
+void urt__program_tick(urt_emulator_t *e);
+int urt__program_state(urt_emulator_t *e, int snapshot_state);  /* PLAYING while fetching */  /* per tick: a play held back by a winding-down fetch */
+void urt__program_shutdown(urt_emulator_t *e);
 
 /* Controller time of the newest snapshot [µs]. */
 uint64_t urt__timestamp_us(const urt_emulator_t *e);

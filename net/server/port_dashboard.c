@@ -1,7 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/server/port_dashboard.c — port 29999: the greeting, then one reply line per request
- * line (urt_dashboard_handle), and the actions that follow a reply: programs on the runner,
- * robot-mode changes through the controller, quit and shutdown. */
+ * line (urt_dashboard_handle), and the actions that follow a reply: programs on the runner
+ * (program_play.c), robot-mode changes through the controller, quit and shutdown. */
 #define _GNU_SOURCE
 #include <fcntl.h>
 #include <stdio.h>
@@ -12,34 +12,12 @@
 
 #include "emulator_internal.h"
 
-// Play the loaded program: its text (URScript) goes to the runner as a main program. The file
-// was resolved under the programs directory by `load`; O_NOFOLLOW closes the window in which
-// it could have been swapped for a link since.
-static void play_program(urt_emulator_t *e) {
-  int fd = open(e->dash.program_path, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
-  struct stat st;
-  if (fd < 0 || fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size <= 0 ||
-      st.st_size > (off_t)URT_SCRIPT_MAX_TEXT) {
-    if (fd >= 0) {
-      close(fd);
-    }
-    urt__script_broadcast_text(e, "urtwin: the loaded program cannot be read");
-    return;
-  }
-  char *text = malloc((size_t)st.st_size);
-  ssize_t got = text ? read(fd, text, (size_t)st.st_size) : -1;
-  close(fd);
-  if (got == st.st_size) {
-    urt_runner_submit(e->runner, text, (size_t)got);
-  }
-  free(text);
-}
-
 static void perform(urt_emulator_t *e, urt__client_t *c, const urt_dashboard_action_t *a,
                     const urt_dashboard_robot_t *robot) {
   switch (a->program) {
     case URT_DASHBOARD_PROG_LOAD:
     case URT_DASHBOARD_PROG_STOP:
+      urt__program_cancel(e);  // first: an External Control fetch must not submit after this
       urt_runner_stop(e->runner);
       urt__submit_kind(e, URT_CTRL_RESUME);  // a stopped program is no longer paused
       break;
@@ -47,7 +25,7 @@ static void perform(urt_emulator_t *e, urt__client_t *c, const urt_dashboard_act
       if (robot->program_state == URT_PROGRAM_PAUSED) {
         urt__submit_kind(e, URT_CTRL_RESUME);
       } else {
-        play_program(e);
+        urt__program_play(e);
       }
       break;
     case URT_DASHBOARD_PROG_PAUSE:
@@ -98,6 +76,7 @@ static bool dashboard_input(urt_emulator_t *e, urt__client_t *c, const uint8_t *
     urt_loop_read_latest(e->loop, &s);
     urt_dashboard_robot_t robot;
     urt_dashboard_robot_from_snapshot(&s, &robot);
+    robot.program_state = urt__program_state(e, robot.program_state);
     robot.pstop_age = e->pstop_since >= 0 ? s.time - e->pstop_since : -1.0;
     urt_dashboard_action_t action;
     size_t len = urt_dashboard_handle(&e->dash_ctx, &robot, &e->dash, &line, reply, sizeof reply,
@@ -118,8 +97,10 @@ static void dashboard_close(urt_emulator_t *e, urt__client_t *c) {
 const urt__port_ops_t urt__port_dashboard_ops = {.open = dashboard_open, .input = dashboard_input,
                                                  .close = dashboard_close};
 
-// Remember when a protective stop began (the dashboard refuses to unlock it for 5 s).
+// Per tick: start a play held back by a winding-down fetch, and remember when a protective
+// stop began (the dashboard refuses to unlock it for 5 s).
 void urt__dashboard_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
+  urt__program_tick(e);
   if (s->safety_mode == URT_SAFETY_MODE_PROTECTIVE_STOP) {
     if (e->pstop_since < 0) {
       e->pstop_since = s->time;

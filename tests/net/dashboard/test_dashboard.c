@@ -410,6 +410,37 @@ static void test_dashboard__load_resolves_inside_the_programs_directory(void **s
   assert_string_equal(say(fx, "load prog.script"), "Loading program: /programs/prog.script");
 }
 
+// The owner's prepare hook (the emulator compiles a .urp there): it sees the resolved host
+// path, and a refusal is UR's load error plus the reason, the loaded program unchanged.
+static char g_prepared[1024];
+static int prepare_refusing_bad(void *user, const char *host_path, char *why, size_t why_sz) {
+  (void)user;
+  snprintf(g_prepared, sizeof g_prepared, "%s", host_path);
+  if (strstr(host_path, "/sub/")) {
+    snprintf(why, why_sz, "unsupported program node 'Timer'");
+    return -1;
+  }
+  return 0;
+}
+
+static void test_dashboard__load_refused_by_prepare_keeps_the_loaded_program(void **state) {
+  fixture_t *fx = *state;
+  fx->ctx.prepare_program = prepare_refusing_bad;
+  assert_string_equal(say(fx, "load wait_program.urp"),
+                      "Loading program: /programs/wait_program.urp");
+  assert_non_null(strstr(g_prepared, "/programs/wait_program.urp"));
+  assert_string_equal(say(fx, "load sub/inner.urp"),
+                      "Error while loading program: sub/inner.urp: unsupported program node "
+                      "'Timer'");
+  assert_non_null(strstr(g_prepared, "/programs/sub/inner.urp"));
+  assert_int_equal(fx->act.program, URT_DASHBOARD_PROG_NONE);  // nothing stops, nothing loads
+  assert_string_equal(say(fx, "get loaded program"), "Loaded program: /programs/wait_program.urp");
+  // a file that is not there never reaches the hook
+  g_prepared[0] = '\0';
+  assert_string_equal(say(fx, "load missing.urp"), "File not found: missing.urp");
+  assert_string_equal(g_prepared, "");
+}
+
 static void test_dashboard__load_refuses_escapes_and_bad_files(void **state) {
   fixture_t *fx = *state;
   fx->robot.robot_mode = URT_ROBOT_MODE_RUNNING;
@@ -623,6 +654,7 @@ int main(void) {
       cmocka_unit_test(test_dashboard_framer__splits_lines_across_chunks),
       cmocka_unit_test_setup_teardown(test_dashboard_framer__overlong_line_resyncs_at_newline, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__binary_bytes_never_break_the_reply_line, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_dashboard__load_refused_by_prepare_keeps_the_loaded_program, setup, teardown),
       cmocka_unit_test(test_dashboard__robot_from_snapshot_copies_modes),
   };
   return cmocka_run_group_tests_name("net/dashboard", tests, NULL, NULL);

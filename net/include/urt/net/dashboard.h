@@ -51,6 +51,14 @@ typedef struct urt_dashboard_ctx {
   /* Comma-separated file name endings `load` accepts, e.g. ".urp,.script". NULL: ".urp".
    * Nullable. */
   const char *program_exts;
+  /* Called by `load` with the resolved host path of a program it is about to accept: the
+   * owner reads and compiles it (a .urp into URScript) and keeps the result for `play`.
+   * Returns 0 to accept; otherwise fills why (one line, e.g. "unsupported program node
+   * 'Timer'") and `load` replies "Error while loading program: <name>: <why>", the loaded
+   * program staying what it was. Runs on the thread that calls urt_dashboard_handle() and may
+   * allocate. Nullable (every existing file is accepted). */
+  int (*prepare_program)(void *user, const char *host_path, char *why, size_t why_sz);
+  void *prepare_user;
 } urt_dashboard_ctx_t;
 
 //---- robot state (filled by the caller from the snapshot before each line) ----
@@ -163,7 +171,8 @@ typedef struct urt_dashboard_action {
  * reply line into reply[0..cap) (NUL-terminated; variable parts are cut to fit, so with
  * cap >= URT_DASHBOARD_REPLY_MAX nothing is cut). *action tells the caller what to do next.
  * `load` and `load installation` resolve names with realpath() under ctx->programs_dir and
- * refuse anything outside it. Context: non-RT (load touches the file system); no allocation.
+ * refuse anything outside it. Context: non-RT (load touches the file system); no allocation
+ * here, though ctx->prepare_program may allocate.
  * Returns the reply length in bytes (without the NUL), or 0 if cap < 2. */
 size_t urt_dashboard_handle(const urt_dashboard_ctx_t *ctx, const urt_dashboard_robot_t *robot,
                             urt_dashboard_state_t *st, const urt_dashboard_line_t *line,

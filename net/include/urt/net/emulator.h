@@ -33,6 +33,11 @@ typedef struct urt_emulator_config {
   const char *const *script_allow_hosts;  /* hosts besides loopback URScript's socket_open
                                              may dial (--script-allow-host; at most 16)   */
   int n_script_allow_hosts;
+  /* Where a played program's External Control node fetches its program (the URCap's
+     installation: host IP and port). NULL / 0: 127.0.0.1 / 50002. Loopback only: create
+     refuses any other host. */
+  const char *external_control_host;
+  int external_control_port;
 } urt_emulator_config_t;
 
 /* Per-port counters (readable while running, approximately). */
