@@ -35,10 +35,15 @@ apt:
 
 venv: $(VENV)/.stamp
 
+# cyclonedds (Python) builds against the system's Cyclone: its setup looks for
+# $$CYCLONEDDS_HOME/{lib,include,bin}, which Debian spreads over multiarch directories
+CDDS_HOME := $(abspath $(VENV))/cyclonedds-home
 $(VENV)/.stamp: tools/requirements.txt
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -r tools/requirements.txt
+	mkdir -p $(CDDS_HOME) && ln -sfn /usr/include $(CDDS_HOME)/include && \
+	  ln -sfn /usr/lib/$$(gcc -print-multiarch) $(CDDS_HOME)/lib && ln -sfn /usr/bin $(CDDS_HOME)/bin
+	CYCLONEDDS_HOME=$(CDDS_HOME) $(PY) -m pip install -q -r tools/requirements.txt
 	touch $@
 
 # ---- build -----------------------------------------------------------------------------

@@ -347,6 +347,8 @@ static void publish_drive_sample(urt_loop_t *l) {
     s->flex_x[j] = d->x[j][URT_X_XFS];
     s->flex_y[j] = d->x[j][URT_X_YFS];
     s->bristle_z[j] = d->x[j][URT_X_Z];
+    s->i_meas[j] = d->i_fb[j];
+    s->temperature[j] = l->c.temperature[j];
   }
   urt_seqlock_write(&l->drive_history[s->seq % DRIVE_HISTORY], s);
   atomic_store_explicit(&l->latest_drive, s->seq, memory_order_release);
