@@ -16,6 +16,7 @@
 #include <time.h>
 
 #include "urt/errors.h"
+#include "urt/net/dds_config_check.h"
 #include "urt/net/dds_messages.h"
 #include "urt/thread.h"
 
@@ -47,6 +48,7 @@ typedef struct endpoint_spec {
   const dds_topic_descriptor_t *desc;
   const char *hash;
   int latched;
+  int depth;           /* history: 0 = the driver's KEEP_LAST 1 */
 } endpoint_spec_t;
 
 static const endpoint_spec_t kWriters[W_COUNT] = {
@@ -65,7 +67,9 @@ static const endpoint_spec_t kWriters[W_COUNT] = {
                        &ur_dashboard_msgs_msg_dds__SafetyMode__desc, H_SAFETY_MODE, 1},
     [W_PROGRAM_RUNNING] = {"io_and_status_controller/robot_program_running",
                            &std_msgs_msg_dds__Bool__desc, H_BOOL, 1},
-    [W_DRIVE] = {"urtwin/drive", &urtwin_msgs_msg_dds__Drive__desc, H_DRIVE, 0},
+    // urtwin's own: a deeper writer history, so that a reliable reader can have every batch
+    // repaired (with KEEP_LAST 1 a lost fragment of a batch already replaced is gone)
+    [W_DRIVE] = {"urtwin/drive", &urtwin_msgs_msg_dds__Drive__desc, H_DRIVE, 0, 100},
 };
 
 static const endpoint_spec_t kReaders[R_COUNT] = {
@@ -160,6 +164,13 @@ static char *read_config(const char *path, char *err, size_t err_sz) {
     return NULL;
   }
   text[len] = '\0';
+  char why[160];
+  if (urt_dds_config_check(text, why, sizeof why) != 0) {
+    set_err(err, err_sz, "dds: --dds-config %s is not a well-formed Cyclone DDS configuration: %s",
+            path, why);
+    free(text);
+    return NULL;
+  }
   return text;
 }
 
@@ -168,7 +179,7 @@ static dds_qos_t *endpoint_qos(const endpoint_spec_t *e, int writer) {
   // topics TRANSIENT_LOCAL (dds.md §2.2, §2.5)
   dds_qos_t *q = dds_create_qos();
   dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_INFINITY);
-  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, 1);
+  dds_qset_history(q, DDS_HISTORY_KEEP_LAST, e->depth > 0 ? e->depth : 1);
   if (e->latched) {
     dds_qset_durability(q, DDS_DURABILITY_TRANSIENT_LOCAL);
     dds_qset_durability_service(q, 0, DDS_HISTORY_KEEP_LAST, 1, DDS_LENGTH_UNLIMITED,
