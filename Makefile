@@ -89,6 +89,7 @@ test-python: build
 bench: build
 	URT_BUILD=$(abspath build) $(PY) tools/bench.py --out build/bench.json
 	URT_BUILD=$(abspath build) $(PY) tools/bench_ports.py --out build/bench_ports.json
+	URT_BUILD=$(abspath build) $(PY) tools/bench_dds.py --out build/bench_dds.json
 
 # the full 10 s excitation comparison against CVODE, noise off, at 20 and 10 kHz (slow: about
 # 7 minutes each on one core)

@@ -382,6 +382,9 @@ static void publish_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
     dropped += l->ring[i].dropped;
   }
   s->cmd_dropped = dropped;
+  struct timespec wall;
+  clock_gettime(CLOCK_REALTIME, &wall);  // vDSO: no system call
+  s->published_wall_ns = (int64_t)wall.tv_sec * 1000000000 + wall.tv_nsec;
   urt_seqlock_write(&l->history[tick % URT_LOOP_HISTORY], s);
   atomic_store_explicit(&l->latest_tick, tick, memory_order_release);
   atomic_store(&l->futex_word, (uint32_t)tick);

@@ -228,8 +228,12 @@ typedef struct pub_state {
   int32_t robot_mode, safety_mode, running;
 } pub_state_t;
 
-static void write_or_count(urt_dds_bridge_t *b, int w, const void *msg) {
-  if (dds_write(b->writers[w], msg) < 0) {
+// the DDS source timestamp of a tick's messages is the wall time the loop published the tick
+// (the header stamp identifies the tick; this one lets a subscriber measure tick → arrival)
+static void write_or_count(urt_dds_bridge_t *b, int w, const void *msg, int64_t source_ns) {
+  dds_return_t rc = source_ns > 0 ? dds_write_ts(b->writers[w], msg, source_ns)
+                                  : dds_write(b->writers[w], msg);
+  if (rc < 0) {
     bump(&b->n.write_errors, 1);
   }
 }
@@ -238,32 +242,32 @@ static void publish_tick(urt_dds_bridge_t *b, pub_state_t *ps, const urt_snapsho
   const int64_t stamp = atomic_load(&b->epoch_ns) + llround(s->time * 1e9);
   sensor_msgs_msg_dds__JointState_ js;
   urt_dds_fill_joint_state(s, stamp, &ps->out, &js);
-  write_or_count(b, W_JOINT_STATES, &js);
+  write_or_count(b, W_JOINT_STATES, &js, s->published_wall_ns);
   geometry_msgs_msg_dds__WrenchStamped_ wr;
   urt_dds_fill_wrench(s, stamp, &wr);
-  write_or_count(b, W_WRENCH, &wr);
+  write_or_count(b, W_WRENCH, &wr, s->published_wall_ns);
   geometry_msgs_msg_dds__PoseStamped_ po;
   urt_dds_fill_pose(s, stamp, &po);
-  write_or_count(b, W_POSE, &po);
+  write_or_count(b, W_POSE, &po, s->published_wall_ns);
   std_msgs_msg_dds__Float64_ sc = {.data = s->speed_scaling * 100.0};  // percent, as the driver
-  write_or_count(b, W_SPEED_SCALING, &sc);
+  write_or_count(b, W_SPEED_SCALING, &sc, s->published_wall_ns);
   ur_msgs_msg_dds__IOStates_ io;
   urt_dds_fill_io_states(s, &ps->out, &io);
-  write_or_count(b, W_IO_STATES, &io);
+  write_or_count(b, W_IO_STATES, &io, s->published_wall_ns);
 
   // latched: at start, then on change
   const int32_t running = s->program_state == URT_PROGRAM_PLAYING;
   if (!ps->have_modes || s->robot_mode != ps->robot_mode) {
     ur_dashboard_msgs_msg_dds__RobotMode_ m = {.mode = (int8_t)s->robot_mode};
-    write_or_count(b, W_ROBOT_MODE, &m);
+    write_or_count(b, W_ROBOT_MODE, &m, s->published_wall_ns);
   }
   if (!ps->have_modes || s->safety_mode != ps->safety_mode) {
     ur_dashboard_msgs_msg_dds__SafetyMode_ m = {.mode = (uint8_t)s->safety_mode};
-    write_or_count(b, W_SAFETY_MODE, &m);
+    write_or_count(b, W_SAFETY_MODE, &m, s->published_wall_ns);
   }
   if (!ps->have_modes || running != ps->running) {
     std_msgs_msg_dds__Bool_ m = {.data = running != 0};
-    write_or_count(b, W_PROGRAM_RUNNING, &m);
+    write_or_count(b, W_PROGRAM_RUNNING, &m, s->published_wall_ns);
   }
   ps->have_modes = 1;
   ps->robot_mode = s->robot_mode;
@@ -293,7 +297,7 @@ static void publish_drive(urt_dds_bridge_t *b, pub_state_t *ps) {
     if (n == URT_DDS_DRIVE_BATCH || ps->next_seq > newest) {
       urtwin_msgs_msg_dds__Drive_ msg;
       urt_dds_fill_drive(wall_ns(), atomic_load(&b->n.drive_lost), n, &ps->out, &msg);
-      write_or_count(b, W_DRIVE, &msg);
+      write_or_count(b, W_DRIVE, &msg, 0);
       bump(&b->n.drive_messages, 1);
       bump(&b->n.drive_samples, n);
       n = 0;

@@ -106,6 +106,20 @@ def latest_q(rd, timeout=5.0):
     return list(last.position)
 
 
+def test_the_python_binding_runs_the_emulators_cyclone():
+    """The subscriber side is Cyclone 0.10 too: the binding's version is 0.10.x and the C
+    library it loaded is the system's libddsc (Debian's 0.10.2), the emulator's."""
+    from importlib.metadata import version
+    assert version("cyclonedds").startswith("0.10."), version("cyclonedds")
+    ds.DomainParticipant(ds.random_domain())
+    with open("/proc/self/maps") as f:
+        libs = {ln.split()[-1] for ln in f if "libddsc" in ln}
+    assert libs and all(lib.startswith(("/usr/lib/", "/lib/")) for lib in libs), libs
+    out = subprocess.run(["ldd", URTWIN], capture_output=True, text=True).stdout
+    emu_lib = [ln.split("=>")[1].split()[0] for ln in out.splitlines() if "libddsc" in ln]
+    assert emu_lib and os.path.realpath(emu_lib[0]) in {os.path.realpath(x) for x in libs}
+
+
 # ---- publishing -------------------------------------------------------------------------------
 
 def test_joint_states_10_s_no_gap_and_equal_to_rtde_bit_for_bit():
