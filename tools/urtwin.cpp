@@ -52,6 +52,7 @@ struct Options {
   std::string dds_config = "config/cyclonedds-lo.xml";
   std::string dds_prefix;
   double dds_timeout = 0.1;
+  bool dds_node_info = false;
   int rt_priority = 0;
   bool lock_memory = false;
   bool local_control = false;
@@ -155,6 +156,9 @@ int main(int argc, char** argv) {
   app.add_option("--dds-config", o.dds_config, "Cyclone DDS XML configuration (default: loopback only)")
       ->capture_default_str();
   app.add_option("--dds-prefix", o.dds_prefix, "namespace of every DDS topic (several emulators per domain)");
+  app.add_flag("--dds-node-info", o.dds_node_info,
+               "announce the ROS node \"urtwin\" on ros_discovery_info (ros2 node list; Iron and "
+               "later, not Humble)");
   app.add_option("--dds-command-timeout", o.dds_timeout,
                  "forward position/velocity commands: stop the arm this long after the last [s]")
       ->check(CLI::Range(0.004, 10.0))->capture_default_str();
@@ -280,6 +284,7 @@ int main(int argc, char** argv) {
     dc.prefix = o.dds_prefix.c_str();
     dc.command_timeout = o.dds_timeout;
     dc.local_control = o.local_control;
+    dc.node_info = o.dds_node_info;
     int drc = urt_dds_bridge_create(loop, &dc, &dds, err, sizeof err);
     if (drc != 0) {
       std::fprintf(stderr, "urtwin: %s\n", err);

@@ -38,6 +38,7 @@
 #define H_FLOAT64_MULTI "RIHS01_1025ddc6b9552d191f89ef1a8d2f60f3d373e28b283d8891ddcc974e8c55397f"
 #define H_JOINT_TRAJ "RIHS01_179b33eba59d676f6d967ac71fe35e7ca2f64b2f3928f4a018cec115e213796e"
 #define H_DRIVE "RIHS01_b9d9ead2f062d64ef3dbf56f71eb590eece52604e6418770f3dd92eff48488e2"
+#define H_PARTICIPANT_INFO "RIHS01_91a0593bacdcc50ea9bdcf849a938b128412cc1ea821245c663bcd26f83c295e"
 
 enum { W_JOINT_STATES, W_WRENCH, W_POSE, W_SPEED_SCALING, W_IO_STATES, W_ROBOT_MODE,
        W_SAFETY_MODE, W_PROGRAM_RUNNING, W_DRIVE, W_COUNT };
@@ -47,7 +48,7 @@ typedef struct endpoint_spec {
   const char *topic;   /* ROS name without the leading / and the prefix */
   const dds_topic_descriptor_t *desc;
   const char *hash;
-  int latched;
+  int latched;         /* 1: TRANSIENT_LOCAL; 2: that, and a graph topic (no rt/, no namespace) */
   int depth;           /* history: 0 = the driver's KEEP_LAST 1 */
 } endpoint_spec_t;
 
@@ -93,6 +94,7 @@ struct urt_dds_bridge {
   dds_entity_t domain, participant;
   dds_entity_t writers[W_COUNT], readers[R_COUNT];
   dds_entity_t waitset;
+  dds_entity_t node_info;     /* ros_discovery_info writer, 0 without --dds-node-info */
 
   pthread_t pub_thread, cmd_thread;
   int pub_running, cmd_running, abandoned;
@@ -203,7 +205,11 @@ static dds_entity_t make_endpoint(urt_dds_bridge_t *b, const endpoint_spec_t *e,
                                   char *err, size_t err_sz) {
   char name[256];
   const char *pre = b->cfg.prefix;
-  snprintf(name, sizeof name, "rt/%s%s%s", pre, pre[0] ? "/" : "", e->topic);
+  if (e->latched == 2) {  // a graph topic: no rt/ prefix, no namespace (rmw's avoid_ros_namespace)
+    snprintf(name, sizeof name, "%s", e->topic);
+  } else {
+    snprintf(name, sizeof name, "rt/%s%s%s", pre, pre[0] ? "/" : "", e->topic);
+  }
   dds_entity_t topic = dds_create_topic(b->participant, e->desc, name, NULL, NULL);
   if (topic < 0) {
     set_err(err, err_sz, "dds: cannot create topic %s: %s", name, dds_strretcode(topic));
@@ -217,6 +223,47 @@ static dds_entity_t make_endpoint(urt_dds_bridge_t *b, const endpoint_spec_t *e,
     set_err(err, err_sz, "dds: cannot create an endpoint on %s: %s", name, dds_strretcode(ep));
   }
   return ep;
+}
+
+// ros_discovery_info: one sample for this participant, one node owning every endpoint; ROS
+// readers are RELIABLE, TRANSIENT_LOCAL, KEEP_ALL: latched, written once (the endpoints never
+// change). GIDs are the DDS GUIDs (rmw's convert_guid_to_gid).
+static int announce_node(urt_dds_bridge_t *b, char *err, size_t err_sz) {
+  static const endpoint_spec_t spec = {"ros_discovery_info",
+                                       &rmw_dds_common_msg_dds__ParticipantEntitiesInfo__desc,
+                                       H_PARTICIPANT_INFO, 2, 0};
+  b->node_info = make_endpoint(b, &spec, 1, err, err_sz);
+  if (b->node_info < 0) {
+    return URT_EIO;
+  }
+  rmw_dds_common_msg_dds__Gid_ rgid[R_COUNT], wgid[W_COUNT];
+  dds_guid_t g;
+  for (int r = 0; r < R_COUNT; r++) {
+    dds_get_guid(b->readers[r], &g);
+    memcpy(rgid[r].data, g.v, 16);
+  }
+  for (int w = 0; w < W_COUNT; w++) {
+    dds_get_guid(b->writers[w], &g);
+    memcpy(wgid[w].data, g.v, 16);
+  }
+  rmw_dds_common_msg_dds__NodeEntitiesInfo_ node;
+  memset(&node, 0, sizeof node);
+  snprintf(node.node_namespace, sizeof node.node_namespace, "/%s", b->cfg.prefix);
+  snprintf(node.node_name, sizeof node.node_name, "urtwin");
+  node.reader_gid_seq = (dds_sequence_rmw_dds_common_msg_dds__Gid_){R_COUNT, R_COUNT, rgid, false};
+  node.writer_gid_seq = (dds_sequence_rmw_dds_common_msg_dds__Gid_){W_COUNT, W_COUNT, wgid, false};
+  rmw_dds_common_msg_dds__ParticipantEntitiesInfo_ info;
+  memset(&info, 0, sizeof info);
+  dds_get_guid(b->participant, &g);
+  memcpy(info.gid.data, g.v, 16);
+  info.node_entities_info_seq._maximum = info.node_entities_info_seq._length = 1;
+  info.node_entities_info_seq._buffer = &node;
+  dds_return_t rc = dds_write(b->node_info, &info);
+  if (rc < 0) {
+    set_err(err, err_sz, "dds: cannot write ros_discovery_info: %s%s", dds_strretcode(rc), "");
+    return URT_EIO;
+  }
+  return 0;
 }
 
 //---- publisher thread -------------------------------------------------------------------------
@@ -615,6 +662,9 @@ int urt_dds_bridge_create(urt_loop_t *loop, const urt_dds_config_t *cfg, urt_dds
       set_err(err, err_sz, "dds: cannot wait on a reader%s%s", "", "");
       goto fail;
     }
+  }
+  if (cfg->node_info && announce_node(b, err, err_sz) != 0) {
+    goto fail;
   }
   // the command thread is this ring's only producer
   b->producer = urt_loop_add_producer(loop, "dds");

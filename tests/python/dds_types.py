@@ -7,7 +7,8 @@ from dataclasses import dataclass, field
 
 import cyclonedds.idl.annotations as annotate
 from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import array, float32, float64, int8, int32, sequence, uint8, uint32, uint64
+from cyclonedds.idl.types import (array, bounded_str, float32, float64, int8, int32, sequence, uint8,
+                                  uint32, uint64)
 
 
 @dataclass
@@ -203,6 +204,29 @@ class Drive_(IdlStruct, typename="urtwin_msgs::msg::dds_::Drive_"):
     header: Header_ = field(default_factory=Header_)
     samples_lost: uint64 = 0
     samples: sequence[DriveSample_] = field(default_factory=list)
+
+
+@dataclass
+@annotate.final
+class Gid_(IdlStruct, typename="rmw_dds_common::msg::dds_::Gid_"):
+    data: array[uint8, 16] = field(default_factory=lambda: [0] * 16)
+
+
+@dataclass
+@annotate.final
+class NodeEntitiesInfo_(IdlStruct, typename="rmw_dds_common::msg::dds_::NodeEntitiesInfo_"):
+    node_namespace: bounded_str[256] = ""
+    node_name: bounded_str[256] = ""
+    reader_gid_seq: sequence[Gid_] = field(default_factory=list)
+    writer_gid_seq: sequence[Gid_] = field(default_factory=list)
+
+
+@dataclass
+@annotate.final
+class ParticipantEntitiesInfo_(IdlStruct,
+                               typename="rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_"):
+    gid: Gid_ = field(default_factory=Gid_)
+    node_entities_info_seq: sequence[NodeEntitiesInfo_] = field(default_factory=list)
 
 
 JOINT_NAMES = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint",

@@ -293,6 +293,34 @@ def test_drive_batches_every_sample_in_order():
             assert any(c != cm for c, cm in zip(s.current, s.current_measured))  # sensor != truth
 
 
+def test_node_info_names_every_endpoint_for_ros2_node_list():
+    import uuid
+    from dds_types import ParticipantEntitiesInfo_
+    with dds_emulator("--dds-node-info", "--dds-prefix", "cell2") as emu:
+        dp = ds.DomainParticipant(emu.domain)
+        rd = ds.DataReader(dp, ds.Topic(dp, "ros_discovery_info", ParticipantEntitiesInfo_),
+                           qos=ds.ros_qos(depth=10, latched=True))
+        raw, _ = ds.wait_data(rd)
+        info = ParticipantEntitiesInfo_.deserialize(raw)
+        pubs = ds.endpoints(dp, publications=True, expect=len(PUBLISHED))
+        subs = ds.endpoints(dp, publications=False, expect=len(SUBSCRIBED))
+        graph = ds.endpoints(dp, publications=True, topic_prefix="ros_discovery_info")
+    (node,) = info.node_entities_info_seq
+    assert (node.node_namespace, node.node_name) == ("/cell2", "urtwin")
+    gid = lambda g: uuid.UUID(bytes=bytes(g.data))  # noqa: E731
+    writers = {ep.key for eps in pubs.values() for ep in eps}
+    readers = {ep.key for eps in subs.values() for ep in eps}
+    assert {gid(g) for g in node.writer_gid_seq} == writers
+    assert {gid(g) for g in node.reader_gid_seq} == readers
+    (ep,) = graph["ros_discovery_info"]
+    assert gid(info.gid) == ep.participant_key
+    from cyclonedds.core import Policy
+    assert ep.type_name == "rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_"
+    assert ep.qos[Policy.Userdata].data == \
+        f"typehash={rihs01('rmw_dds_common/msg/ParticipantEntitiesInfo')};".encode()
+    assert ep.qos[Policy.Durability] == Policy.Durability.TransientLocal
+
+
 def test_prefix_namespaces_every_topic():
     with dds_emulator("--dds-prefix", "robot1") as emu:
         dp = ds.DomainParticipant(emu.domain)

@@ -38,6 +38,10 @@ typedef struct urt_dds_config {
   double command_timeout;   /* forward commands: the arm stops this long after the last [s]   */
   double velocity_accel;    /* forward velocity commands: speedj acceleration [rad/s²]       */
   int local_control;        /* 1: the pendant has control: every command is refused          */
+  int node_info;            /* 1: announce a ROS node "urtwin" (namespace "/" + prefix) owning
+                               every endpoint on ros_discovery_info, so `ros2 node list` shows
+                               it — Iron/Jazzy/Kilted/Rolling layout (16-byte GIDs); Humble's
+                               24-byte layout would be mis-decoded, hence off by default      */
 } urt_dds_config_t;
 
 void urt_dds_config_default(urt_dds_config_t *cfg);
