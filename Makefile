@@ -5,7 +5,8 @@
 #               libFuzzer targets for FUZZ_SECONDS each under ASan/UBSan, then pytest
 #   make fuzz   the libFuzzer targets for longer (FUZZ_SECONDS=600 each)
 #   make bench  urt_step against MuJoCo mj_step and Pinocchio ABA (build/bench.json), then the
-#               running emulator: 30003 jitter with 8 clients, overruns, memory (bench_ports.json)
+#               running emulator: 30003 jitter with 8 clients, overruns, memory (bench_ports.json),
+#               DDS off vs on with 8 subscribers: latency tick -> subscriber, overruns (bench_dds.json)
 
 SHELL := /bin/bash
 JOBS ?= $(shell nproc)
