@@ -285,6 +285,7 @@ int main(int argc, char** argv) {
     dc.command_timeout = o.dds_timeout;
     dc.local_control = o.local_control;
     dc.node_info = o.dds_node_info;
+    dc.rt_priority = ec.rt_priority;  // as the I/O threads
     int drc = urt_dds_bridge_create(loop, &dc, &dds, err, sizeof err);
     if (drc != 0) {
       std::fprintf(stderr, "urtwin: %s\n", err);

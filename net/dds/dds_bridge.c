@@ -697,6 +697,10 @@ int urt_dds_bridge_start(urt_dds_bridge_t *b) {
     return URT_EIO;
   }
   b->cmd_running = 1;
+  if (b->cfg.rt_priority > 0) {
+    urt_thread_set_fifo(b->pub_thread, b->cfg.rt_priority, "dds publisher");
+    urt_thread_set_fifo(b->cmd_thread, b->cfg.rt_priority, "dds commands");
+  }
   return 0;
 }
 

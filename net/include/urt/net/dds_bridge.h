@@ -38,6 +38,8 @@ typedef struct urt_dds_config {
   double command_timeout;   /* forward commands: the arm stops this long after the last [s]   */
   double velocity_accel;    /* forward velocity commands: speedj acceleration [rad/s²]       */
   int local_control;        /* 1: the pendant has control: every command is refused          */
+  int rt_priority;          /* > 0: SCHED_FIFO priority of both threads (best effort), as the
+                               I/O threads: on a loaded host they keep up with the ticks      */
   int node_info;            /* 1: announce a ROS node "urtwin" (namespace "/" + prefix) owning
                                every endpoint on ros_discovery_info, so `ros2 node list` shows
                                it — Iron/Jazzy/Kilted/Rolling layout (16-byte GIDs); Humble's
