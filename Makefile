@@ -6,7 +6,8 @@
 #               tools/check_tests_ran.py: everything in tests/expected_tests.txt ran, nothing else
 #   make fuzz   the libFuzzer targets for longer (FUZZ_SECONDS=600 each)
 #   make bench  urt_step against MuJoCo mj_step and Pinocchio ABA (build/bench.json), then the
-#               running emulator: 30003 jitter with 8 clients, overruns, memory (bench_ports.json)
+#               running emulator: 30003 jitter with 8 clients, overruns, memory (bench_ports.json),
+#               DDS off vs on with 8 subscribers: latency tick -> subscriber, overruns (bench_dds.json)
 
 SHELL := /bin/bash
 JOBS ?= $(shell nproc)
@@ -36,10 +37,15 @@ apt:
 
 venv: $(VENV)/.stamp
 
+# cyclonedds (Python) builds against the system's Cyclone: its setup looks for
+# $$CYCLONEDDS_HOME/{lib,include,bin}, which Debian spreads over multiarch directories
+CDDS_HOME := $(abspath $(VENV))/cyclonedds-home
 $(VENV)/.stamp: tools/requirements.txt
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -r tools/requirements.txt
+	mkdir -p $(CDDS_HOME) && ln -sfn /usr/include $(CDDS_HOME)/include && \
+	  ln -sfn /usr/lib/$$(gcc -print-multiarch) $(CDDS_HOME)/lib && ln -sfn /usr/bin $(CDDS_HOME)/bin
+	CYCLONEDDS_HOME=$(CDDS_HOME) $(PY) -m pip install -q -r tools/requirements.txt
 	touch $@
 
 # ---- build -----------------------------------------------------------------------------
@@ -103,6 +109,7 @@ test-python: build
 bench: build
 	URT_BUILD=$(abspath build) $(PY) tools/bench.py --out build/bench.json
 	URT_BUILD=$(abspath build) $(PY) tools/bench_ports.py --out build/bench_ports.json
+	URT_BUILD=$(abspath build) $(PY) tools/bench_dds.py --out build/bench_dds.json
 
 # the full 10 s excitation comparison against CVODE, noise off, at 20 and 10 kHz (slow: about
 # 7 minutes each on one core)

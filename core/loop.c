@@ -347,6 +347,8 @@ static void publish_drive_sample(urt_loop_t *l) {
     s->flex_x[j] = d->x[j][URT_X_XFS];
     s->flex_y[j] = d->x[j][URT_X_YFS];
     s->bristle_z[j] = d->x[j][URT_X_Z];
+    s->i_meas[j] = d->i_fb[j];
+    s->temperature[j] = l->c.temperature[j];
   }
   urt_seqlock_write(&l->drive_history[s->seq % DRIVE_HISTORY], s);
   atomic_store_explicit(&l->latest_drive, s->seq, memory_order_release);
@@ -380,6 +382,9 @@ static void publish_snapshot(urt_loop_t *l, uint64_t tick, int64_t exec_ns) {
     dropped += atomic_load_explicit(&l->ring[i].dropped, memory_order_relaxed);
   }
   s->cmd_dropped = dropped;
+  struct timespec wall;
+  clock_gettime(CLOCK_REALTIME, &wall);  // vDSO: no system call
+  s->published_wall_ns = (int64_t)wall.tv_sec * 1000000000 + wall.tv_nsec;
   urt_seqlock_write(&l->history[tick % URT_LOOP_HISTORY], s);
   atomic_store_explicit(&l->latest_tick, tick, memory_order_release);
   atomic_store(&l->futex_word, (uint32_t)tick);

@@ -246,4 +246,5 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   s->overruns = 0;
   s->missed_periods = 0;
   s->cmd_dropped = 0;
+  s->published_wall_ns = 0;
 }

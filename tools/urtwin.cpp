@@ -5,6 +5,7 @@
 //   urtwin [--config FILE] [--set KEY=VALUE]... [--bind ADDR] [--port-offset N]
 //          [--controller-version 5.19|3.15|…] [--rate 20000|10000] [--pacing tick|step|free|lockstep]
 //          [--seed N] [--q0 q1,…,q6] [--boot ready|power-off] [--lcm] [--lcm-url URL] …
+//          [--dds] [--dds-domain N] [--dds-config FILE] [--dds-prefix NS] …
 //
 // Exit status: 0 after a clean stop, 1 run-time failure (a port cannot be bound, …),
 // 2 usage or configuration error.
@@ -22,6 +23,7 @@
 #include "urt/core.h"
 #include "urt/loop.h"
 #include "urt/net/emulator.h"
+#include "urt/net/dds_bridge.h"
 #include "urt/net/lcm_bridge.h"
 #include "urt/net/urp.h"
 #include "urt/net/version.h"
@@ -46,6 +48,12 @@ struct Options {
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string lcm_prefix = "URTWIN";
   double drive_rate = 1000.0;
+  bool dds = false;
+  int dds_domain = 0;
+  std::string dds_config = "config/cyclonedds-lo.xml";
+  std::string dds_prefix;
+  double dds_timeout = 0.1;
+  bool dds_node_info = false;
   int rt_priority = 0;
   bool lock_memory = false;
   bool local_control = false;
@@ -110,6 +118,23 @@ long resident_kib() {
   return rss * (sysconf(_SC_PAGESIZE) / 1024);
 }
 
+// one line the tests parse: "urtwin: dds: ticks N lost N drive N/N lost N, write errors N,
+// commands received N accepted N invalid N refused N dropped N"
+void print_dds_stats(const urt_dds_bridge_t* b) {
+  urt_dds_stats_t d;
+  urt_dds_bridge_get_stats(b, &d);
+  std::fprintf(stderr,
+               "urtwin: dds: ticks %llu lost %llu, drive messages %llu samples %llu lost %llu, "
+               "write errors %llu, commands received %llu accepted %llu invalid %llu refused %llu "
+               "dropped %llu\n",
+               (unsigned long long)d.ticks_published, (unsigned long long)d.ticks_lost,
+               (unsigned long long)d.drive_messages, (unsigned long long)d.drive_samples,
+               (unsigned long long)d.drive_lost, (unsigned long long)d.write_errors,
+               (unsigned long long)d.cmd_received, (unsigned long long)d.cmd_accepted,
+               (unsigned long long)d.cmd_invalid, (unsigned long long)d.cmd_refused,
+               (unsigned long long)d.cmd_dropped);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -143,7 +168,20 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--lcm-prefix", o.lcm_prefix, "channel prefix: PREFIX_STATUS, _DRIVE, _COMMAND")
       ->capture_default_str();
-  app.add_option("--drive-rate", o.drive_rate, "LCM drive message rate [Hz]")
+  app.add_flag("--dds", o.dds, "publish the UR ROS 2 driver's topics on Cyclone DDS, take "
+               "forward and trajectory commands");
+  app.add_option("--dds-domain", o.dds_domain, "DDS domain (ROS_DOMAIN_ID)")
+      ->check(CLI::Range(0, URT_DDS_MAX_DOMAIN))->capture_default_str();
+  app.add_option("--dds-config", o.dds_config, "Cyclone DDS XML configuration (default: loopback only)")
+      ->capture_default_str();
+  app.add_option("--dds-prefix", o.dds_prefix, "namespace of every DDS topic (several emulators per domain)");
+  app.add_flag("--dds-node-info", o.dds_node_info,
+               "announce the ROS node \"urtwin\" on ros_discovery_info (ros2 node list; Iron and "
+               "later, not Humble)");
+  app.add_option("--dds-command-timeout", o.dds_timeout,
+                 "forward position/velocity commands: stop the arm this long after the last [s]")
+      ->check(CLI::Range(0.004, 10.0))->capture_default_str();
+  app.add_option("--drive-rate", o.drive_rate, "drive sample rate of LCM and of DDS /urtwin/drive [Hz]")
       ->check(CLI::Range(0.0, 20000.0))->capture_default_str();
   app.add_option("--rt-priority", o.rt_priority, "SCHED_FIFO priority of the physics thread; the I/O and script threads get one less (0: none)")
       ->check(CLI::Range(0, 99))->capture_default_str();
@@ -247,7 +285,7 @@ int main(int argc, char** argv) {
   lc.powered = o.boot == "ready";
   lc.rt_priority = o.rt_priority;
   lc.lock_memory = o.lock_memory;
-  lc.drive_rate = o.lcm ? o.drive_rate : 0.0;
+  lc.drive_rate = o.lcm || o.dds ? o.drive_rate : 0.0;
   urt_loop_t* loop = nullptr;
   int rc = urt_loop_create(m, &lc, o.q0.empty() ? nullptr : q0, &loop, err, sizeof err);
   if (rc != 0) {
@@ -300,18 +338,43 @@ int main(int argc, char** argv) {
     }
   }
 
+  urt_dds_bridge_t* dds = nullptr;
+  if (o.dds) {
+    urt_dds_config_t dc;
+    urt_dds_config_default(&dc);
+    dc.domain = o.dds_domain;
+    dc.config_file = o.dds_config.empty() ? nullptr : o.dds_config.c_str();
+    dc.prefix = o.dds_prefix.c_str();
+    dc.command_timeout = o.dds_timeout;
+    dc.local_control = o.local_control;
+    dc.node_info = o.dds_node_info;
+    dc.rt_priority = ec.rt_priority;  // as the I/O threads
+    int drc = urt_dds_bridge_create(loop, &dc, &dds, err, sizeof err);
+    if (drc != 0) {
+      std::fprintf(stderr, "urtwin: %s\n", err);
+      urt_lcm_bridge_destroy(bridge);
+      urt_emulator_destroy(emu);
+      urt_loop_destroy(loop);
+      urt_model_free(m);
+      return drc == URT_EIO || drc == URT_ENOMEM ? 1 : 2;
+    }
+  }
 
   urt_loop_start(loop);
   urt_emulator_start(emu);
   if (bridge) {
     urt_lcm_bridge_start(bridge);
   }
+  if (dds) {
+    urt_dds_bridge_start(dds);
+  }
   std::fprintf(stderr,
                "urtwin: %s, controller %d.%d.%d (%s, %.0f Hz), physics %.0f Hz, pacing %s, on %s "
                "ports 29999, 30001-30004 (offset %d)%s\n",
                m->name, version.major, version.minor, version.bugfix,
                urt_version_is_eseries(&version) ? "e-Series" : "CB3", 1.0 / lc.period, 1.0 / m->dt,
-               o.pacing.c_str(), o.bind.c_str(), o.port_offset, o.lcm ? ", LCM on" : "");
+               o.pacing.c_str(), o.bind.c_str(), o.port_offset,
+               o.lcm && o.dds ? ", LCM on, DDS on" : o.lcm ? ", LCM on" : o.dds ? ", DDS on" : "");
 
   double since_stats = 0.0;
   while (!g_stop && !urt_emulator_shutdown_requested(emu)) {
@@ -327,9 +390,16 @@ int main(int argc, char** argv) {
                    (unsigned long long)s.ticks, (unsigned long long)s.overruns,
                    (unsigned long long)s.missed_periods, (unsigned long long)s.cmd_dropped,
                    s.exec_last * 1e6, s.exec_max * 1e6, resident_kib());
+      if (dds) {
+        print_dds_stats(dds);
+      }
     }
   }
 
+  if (dds) {
+    urt_dds_bridge_stop(dds);
+    print_dds_stats(dds);
+  }
   if (bridge) {
     urt_lcm_bridge_stop(bridge);
   }
@@ -340,6 +410,7 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",
                (unsigned long long)s.ticks, (unsigned long long)s.overruns,
                (unsigned long long)s.missed_periods);
+  urt_dds_bridge_destroy(dds);
   urt_lcm_bridge_destroy(bridge);
   urt_emulator_destroy(emu);
   urt_loop_destroy(loop);

@@ -57,6 +57,8 @@ typedef struct urt_drive_sample {
   double friction_torque[URT_NJ];   /* LuGre T_f                   [N m]     */
   double flex_x[URT_NJ], flex_y[URT_NJ];  /* flexspline deflection [m]       */
   double bristle_z[URT_NJ];         /* LuGre z                     [rad]     */
+  double i_meas[URT_NJ];            /* the current sensor's reading [A]      */
+  double temperature[URT_NJ];       /* motor winding temperature   [°C]      */
 } urt_drive_sample_t;
 
 typedef struct urt_loop urt_loop_t;

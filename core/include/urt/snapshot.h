@@ -78,6 +78,8 @@ typedef struct urt_snapshot {
   uint64_t missed_periods;    /* whole periods skipped to catch up                    */
   uint64_t cmd_dropped;       /* commands refused because a ring was full             */
   int32_t tool_voltage;       /* tool connector supply (set_tool_voltage)   [V]       */
+  int64_t published_wall_ns;  /* CLOCK_REALTIME when the loop published this tick [ns]
+                               * (DDS source timestamps: tick → subscriber latency)   */
 } urt_snapshot_t;
 
 /* Fill a snapshot from the physics and the controller (calls urt_data_update_outputs).
