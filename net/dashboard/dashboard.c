@@ -516,6 +516,10 @@ static void cmd_clear_operational_mode(const call_t *c) {
   put(c->w, "No longer controlling the operational mode. Current operational mode: '");
   put(c->w, m);
   put(c->w, "'.");
+  // Handed back to the pendant, which has no mode password set (urtwin models none, URSim's
+  // default): `get operational mode` then answers NONE, as UR documents and URCL's
+  // DashboardClientTestG5.operational_mode checks against URSim.
+  c->st->operational_mode = URT_DASHBOARD_OPMODE_NONE;
 }
 
 static void cmd_power_on(const call_t *c) {

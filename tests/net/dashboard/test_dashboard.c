@@ -336,6 +336,7 @@ static void test_dashboard__commands_with_fixed_replies(void **state) {
   assert_string_equal(say(fx, "clear operational mode"),
                       "No longer controlling the operational mode. Current operational mode: 'manual'.");
   assert_false(fx->st.opmode_by_dashboard);
+  assert_string_equal(say(fx, "get operational mode"), "NONE");  /* no mode password */
   assert_string_equal(say(fx, "restart safety"), "Restarting safety");
   assert_int_equal(fx->act.ctrl[0], URT_CTRL_POWER_OFF);
   assert_true(fx->act.restart_safety);
