@@ -574,7 +574,7 @@ static void cmd_restart_safety(const call_t *c) {
 }
 
 static void cmd_is_in_remote_control(const call_t *c) {
-  put(c->w, c->st->remote_control ? "true" : "false");
+  put(c->w, c->st->remote_control && !c->st->remote_control_off ? "true" : "false");
 }
 
 static void cmd_get_serial_number(const call_t *c) {
@@ -826,7 +826,8 @@ size_t urt_dashboard_handle(const urt_dashboard_ctx_t *ctx, const urt_dashboard_
     put(&w, "could not understand: '");
     put_n(&w, s, n);
     put(&w, "'");
-  } else if (cmd->remote_only && is_eseries(&ctx->version) && !st->remote_control) {
+  } else if (cmd->remote_only && is_eseries(&ctx->version) && !st->remote_control &&
+             !st->remote_control_off) {
     put(&w, kLocalRefusal);
   } else {
     call_t c = {ctx, robot, st, s, n, arg, arg_len, &w, action};

@@ -314,6 +314,7 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   e->dash_ctx.program_exts = ".urp,.script";
   urt_dashboard_state_init(&e->dash);
   e->dash.remote_control = !cfg->local_control;
+  e->dash.remote_control_off = cfg->remote_control_off && !cfg->local_control;
 
   e->producer = urt_loop_add_producer(loop, "tcp");
   e->runner_producer = urt_loop_add_producer(loop, "urscript");

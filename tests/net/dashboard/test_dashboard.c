@@ -463,6 +463,18 @@ static void test_dashboard__local_control_refuses_state_changes(void **state) {
   assert_string_equal(say(fx, "popup hi"), "showing popup");
 }
 
+// Remote control disabled in Settings (URSim's default, URCL's CI): not "in remote control",
+// yet nothing is refused.
+static void test_dashboard__remote_control_off_refuses_nothing(void **state) {
+  fixture_t *fx = *state;
+  running_with_program(fx);
+  fx->st.remote_control_off = 1;
+  assert_string_equal(say(fx, "is in remote control"), "false");
+  assert_string_equal(say(fx, "play"), "Starting program");
+  assert_string_equal(say(fx, "stop"), "Stopped");
+  assert_string_equal(say(fx, "power off"), "Powering off");
+}
+
 static void test_dashboard__version_gates_follow_the_emulated_controller(void **state) {
   fixture_t *fx = *state;
 
@@ -620,6 +632,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_dashboard__load_resolves_inside_the_programs_directory, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__load_refuses_escapes_and_bad_files, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__local_control_refuses_state_changes, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_dashboard__remote_control_off_refuses_nothing, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__version_gates_follow_the_emulated_controller, setup, teardown),
       cmocka_unit_test(test_dashboard_framer__splits_lines_across_chunks),
       cmocka_unit_test_setup_teardown(test_dashboard_framer__overlong_line_resyncs_at_newline, setup, teardown),
