@@ -661,6 +661,13 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         }
       }
       break;
+    case URT_CTRL_PROTECTIVE_STOP:
+      // as the physics' own stop, from where the set-point is; only a running arm can stop
+      if (c->robot_mode == URT_ROBOT_MODE_RUNNING &&
+          c->safety_mode != URT_SAFETY_MODE_PROTECTIVE_STOP) {
+        protective_stop(c, d, URT_CTRL_FAULT_SCRIPT_PSTOP, 0);
+      }
+      break;
     case URT_CTRL_HALT:
       if (c->motion != URT_MOTION_IDLE || moving(c)) {
         finish_motion(c);

@@ -57,6 +57,7 @@ struct Options {
   int rt_priority = 0;
   bool lock_memory = false;
   bool local_control = false;
+  bool no_remote_control = false;
   std::string programs_dir = "programs";
   std::string serial_number = "20235501783";
   std::string external_control_host = "127.0.0.1:50002";  // the URCap's host IP and port
@@ -191,6 +192,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--local-control", o.local_control,
                "e-Series: the teach pendant has control (dashboard refuses state changes)");
+  app.add_flag("--no-remote-control", o.no_remote_control,
+               "e-Series: remote control disabled in Settings, URSim's default (`is in remote "
+               "control` answers false, the dashboard refuses nothing)")
+      ->excludes("--local-control");
   app.add_option("--serial-number", o.serial_number, "digits reported by `get serial number`")
       ->check([](const std::string& s) {
         return !s.empty() && s.find_first_not_of("0123456789") == std::string::npos
@@ -300,6 +305,7 @@ int main(int argc, char** argv) {
   ec.version = version;
   ec.programs_dir = o.programs_dir.c_str();
   ec.local_control = o.local_control;
+  ec.remote_control_off = o.no_remote_control;
   ec.serial_number = o.serial_number.c_str();
   ec.external_control_host = ec_host.c_str();
   ec.external_control_port = ec_port;

@@ -10,6 +10,14 @@
 
 //---- layout generations ----
 
+/* MasterboardData's last reserved byte: URCL 2.14 parses the 5.x layout (70 bytes) for every
+ * version and throws on a shorter package ("Could not parse received package"), and its CI
+ * runs that parser in strict mode against URSim 3.14.3, so CB3 3.14+ sends the byte too
+ * (protocols.md §4.3 had 69 for every CB3 from UMD, which predates 3.14). */
+static int masterboard_has_last_reserved(const urt_version_t *v) {
+  return v->major >= 5 || (v->major == 3 && v->minor >= 14);
+}
+
 /* The sub-package layouts change at these versions (protocols.md §4.3). */
 typedef enum layout {
   LAYOUT_CB3_30,  /* 3.0–3.1 */
@@ -46,7 +54,7 @@ int urt_primary_subpackage_size(const urt_version_t *v, int sub_type) {
     case URT_PRIMARY_TOOL_DATA:
       return 5 + 32;
     case URT_PRIMARY_MASTERBOARD_DATA:
-      return 5 + (l == LAYOUT_CB3_30 ? 67 : e ? 70 : 69);
+      return 5 + (l == LAYOUT_CB3_30 ? 67 : masterboard_has_last_reserved(v) ? 70 : 69);
     case URT_PRIMARY_CARTESIAN_INFO:
       return 5 + (l == LAYOUT_CB3_30 ? 48 : 96);
     case URT_PRIMARY_KINEMATICS_INFO:
@@ -202,7 +210,8 @@ static void put_tool_data(urt_wbuf_t *w, const urt_snapshot_t *s) {
   urt_be_put_u8(w, (uint8_t)s->joint_mode[URT_NJ - 1]);  /* tool mode follows wrist 3 */
 }
 
-static void put_masterboard(urt_wbuf_t *w, layout_t l, const urt_snapshot_t *s) {
+static void put_masterboard(urt_wbuf_t *w, layout_t l, int last_reserved,
+                            const urt_snapshot_t *s) {
   urt_be_put_u32(w, s->digital_in);
   urt_be_put_u32(w, s->digital_out);
   urt_be_put_u8(w, 1);  /* analog input ranges (URSim values) */
@@ -225,7 +234,7 @@ static void put_masterboard(urt_wbuf_t *w, layout_t l, const urt_snapshot_t *s) 
     urt_be_put_u8(w, 1);     /* operational mode selector input (URSim value) */
     urt_be_put_u8(w, 1);     /* three-position enabling device input (URSim value) */
   }
-  if (l == LAYOUT_E) {
+  if (last_reserved) {
     urt_be_put_u8(w, 1);     /* reserved (URSim value) */
   }
 }
@@ -335,7 +344,7 @@ int urt_primary_encode_robot_state(const urt_version_t *v, const urt_primary_rob
         urt_be_put_zeros(&w, 6 * 8);
         break;
       case URT_PRIMARY_MASTERBOARD_DATA:
-        put_masterboard(&w, l, s);
+        put_masterboard(&w, l, masterboard_has_last_reserved(v), s);
         break;
       case URT_PRIMARY_TOOL_DATA:
         put_tool_data(&w, s);

@@ -528,6 +528,10 @@ static void cmd_clear_operational_mode(const call_t *c) {
   put(c->w, "No longer controlling the operational mode. Current operational mode: '");
   put(c->w, m);
   put(c->w, "'.");
+  // Handed back to the pendant, which has no mode password set (urtwin models none, URSim's
+  // default): `get operational mode` then answers NONE, as UR documents and URCL's
+  // DashboardClientTestG5.operational_mode checks against URSim.
+  c->st->operational_mode = URT_DASHBOARD_OPMODE_NONE;
 }
 
 static void cmd_power_on(const call_t *c) {
@@ -582,7 +586,7 @@ static void cmd_restart_safety(const call_t *c) {
 }
 
 static void cmd_is_in_remote_control(const call_t *c) {
-  put(c->w, c->st->remote_control ? "true" : "false");
+  put(c->w, c->st->remote_control && !c->st->remote_control_off ? "true" : "false");
 }
 
 static void cmd_get_serial_number(const call_t *c) {
@@ -834,7 +838,8 @@ size_t urt_dashboard_handle(const urt_dashboard_ctx_t *ctx, const urt_dashboard_
     put(&w, "could not understand: '");
     put_n(&w, s, n);
     put(&w, "'");
-  } else if (cmd->remote_only && is_eseries(&ctx->version) && !st->remote_control) {
+  } else if (cmd->remote_only && is_eseries(&ctx->version) && !st->remote_control &&
+             !st->remote_control_off) {
     put(&w, kLocalRefusal);
   } else {
     call_t c = {ctx, robot, st, s, n, arg, arg_len, &w, action};

@@ -103,9 +103,10 @@ static void stream_ticks(urt_emulator_t *e) {
       atomic_fetch_add(&e->ticks_lost, 1);
       continue;
     }
+    urt__dashboard_tick(e, &s);  // first: the protective stop's start, for the 5 s rule
+    urt__script_safety_tick(e, &s);
     urt__script_stream_tick(e, &s);
     urt__rtde_stream_tick(e, &s);
-    urt__dashboard_tick(e, &s);
   }
   e->streamed_tick = newest;
 }
@@ -289,6 +290,7 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   e->cfg.bind = e->bind;
   e->epoll_fd = e->tick_fd = e->msg_fd = -1;
   e->pstop_since = -1.0;
+  e->last_safety_mode = -1;
   for (int k = 0; k < URT__N_PORTS; k++) {
     e->listen_fd[k] = -1;
   }
@@ -320,6 +322,7 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   e->cfg.external_control_port = e->ec_port;
   urt_dashboard_state_init(&e->dash);
   e->dash.remote_control = !cfg->local_control;
+  e->dash.remote_control_off = cfg->remote_control_off && !cfg->local_control;
 
   if (!urt_urcap_host_is_loopback(e->ec_host) || e->ec_port > 65535) {
     snprintf(err, err_sz,

@@ -58,6 +58,7 @@ struct urt_emulator {
   /* 30001–30003 */
   urt_primary_robot_info_t info;
   uint64_t state_every;          /* ticks between robot-state messages (10 Hz) */
+  int32_t last_safety_mode;      /* safety mode of the last streamed tick, < 0: none yet */
 
   /* 30004: the register bank is shared with the runner thread, hence the lock */
   urt_rtde_registry_t rtde_registry;
@@ -115,6 +116,9 @@ void urt__rtde_apply_inputs(urt_emulator_t *e);
 void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s);
 void urt__rtde_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s);
 void urt__dashboard_tick(urt_emulator_t *e, const urt_snapshot_t *s);
+
+/* Safety-mode change messages, before this tick's state (port_script.c). */
+void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s);
 
 /* Robot messages to every primary client (30001, 30011). */
 void urt__script_broadcast(urt_emulator_t *e, const urt_script_msg_t *msg);

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 
 #include "emulator_internal.h"
+#include "urt/controller.h"
 #include "urt/errors.h"
 #include "urt/net/rt_packet.h"
 #include "urt/net/script_framer.h"
@@ -57,6 +58,40 @@ void urt__script_broadcast_text(urt_emulator_t *e, const char *text) {
   urt__script_broadcast(e, &msg);
 }
 
+//---- safety events ----
+
+/* What a real controller reports when the safety mode changes (external_control.md §1.3):
+ * one SAFETY_MODE message per change (URCL's getSafetyMode() comes only from it, so none is
+ * sent before the first change), and, for a protective stop a program asked for, one
+ * ERROR_CODE C209A0 "A protective stop was triggered" at WARNING level (UR's error code 209).
+ * Stops with other causes (limits, the physics) get the SAFETY_MODE message only: urtwin does
+ * not model UR's error codes for them. Code, argument and report data of SAFETY_MODE are 0:
+ * their values on a real controller are not documented. Called before the tick's robot state,
+ * so that on unlock the NORMAL message precedes the state that clears the flag. */
+void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
+  int32_t mode = s->safety_mode;
+  int32_t was = e->last_safety_mode;
+  e->last_safety_mode = mode;
+  if (was < 0 || was == mode) {
+    return;
+  }
+  uint8_t buf[256];
+  uint64_t ts = (uint64_t)(s->time * 1e6 + 0.5);
+  int n = urt_primary_encode_safety_mode(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 0, 0, mode, 0, 0,
+                                         buf, sizeof buf);
+  if (n > 0) {
+    urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
+  }
+  if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP && (s->ctrl_fault & URT_CTRL_FAULT_SCRIPT_PSTOP)) {
+    n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 209, 0,
+                                      URT_PRIMARY_REPORT_WARNING, 0, 0,
+                                      "A protective stop was triggered", buf, sizeof buf);
+    if (n > 0) {
+      urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
+    }
+  }
+}
+
 //---- streaming ----
 
 void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
@@ -76,6 +111,18 @@ void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
 
 //---- input ----
 
+/* `set unlock protective stop`: as on a real controller, not within 5 s of the stop (the
+ * dashboard's `unlock protective stop` has the same rule). Refused with a text message. */
+static void unlock_protective_stop(urt_emulator_t *e) {
+  double age = e->pstop_since >= 0 ? urt__timestamp_us(e) * 1e-6 - e->pstop_since : -1.0;
+  if (age >= 0.0 && age < 5.0) {
+    urt__script_broadcast_text(e, "Cannot unlock protective stop until 5s after occurrence. "
+                                  "Always inspect cause of protective stop before unlocking");
+    return;
+  }
+  urt__submit_kind(e, URT_CTRL_UNLOCK_PSTOP);
+}
+
 // One framed unit from a client: a controller command line, a program or a statement.
 static void on_unit(void *ctx, const urt_script_unit_t *u) {
   urt_emulator_t *e = ctx;
@@ -86,7 +133,7 @@ static void on_unit(void *ctx, const urt_script_unit_t *u) {
         case URT_SCRIPT_CMD_POWER_ON: urt__submit_kind(e, URT_CTRL_POWER_ON); break;
         case URT_SCRIPT_CMD_POWER_OFF: urt__submit_kind(e, URT_CTRL_POWER_OFF); break;
         case URT_SCRIPT_CMD_BRAKE_RELEASE: urt__submit_kind(e, URT_CTRL_BRAKE_RELEASE); break;
-        case URT_SCRIPT_CMD_UNLOCK_PSTOP: urt__submit_kind(e, URT_CTRL_UNLOCK_PSTOP); break;
+        case URT_SCRIPT_CMD_UNLOCK_PSTOP: unlock_protective_stop(e); break;
         case URT_SCRIPT_CMD_STOP_PROGRAM: urt_runner_stop(e->runner); break;
         default: break;  // set sim / set real: urtwin is always a simulation
       }

@@ -125,7 +125,9 @@ typedef enum urt_ctrl_cmd_kind {
                                  compliant axes / deviations [m, rad] of the others); not a
                                  motion: a following SPEEDL runs inside it                    */
   URT_CTRL_FORCE_MODE_END,    /* leave force mode                                           */
-  URT_CTRL_SET_TOOL_VOLTAGE   /* value = 0, 12 or 24: the tool connector's supply [V]        */
+  URT_CTRL_SET_TOOL_VOLTAGE,  /* value = 0, 12 or 24: the tool connector's supply [V]        */
+  URT_CTRL_PROTECTIVE_STOP    /* URScript protective_stop(): a protective stop now (RUNNING
+                                 only), fault URT_CTRL_FAULT_SCRIPT_PSTOP (C209A0 on 30001)   */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
@@ -150,7 +152,8 @@ enum {
   URT_CTRL_FAULT_BAD_TARGET = 1u << 1,     /* NaN/Inf or out-of-limit target → pstop     */
   URT_CTRL_FAULT_IK = 1u << 2,             /* no inverse-kinematics solution             */
   URT_CTRL_FAULT_BAD_ARGUMENT = 1u << 3,   /* a, v, t, gain… outside the allowed range   */
-  URT_CTRL_FAULT_PSTOP = 1u << 4           /* the physics entered a protective stop      */
+  URT_CTRL_FAULT_PSTOP = 1u << 4,          /* the physics entered a protective stop      */
+  URT_CTRL_FAULT_SCRIPT_PSTOP = 1u << 5    /* a program asked for it (protective_stop())  */
 };
 
 typedef struct urt_ctrl {

@@ -336,6 +336,7 @@ static void test_dashboard__commands_with_fixed_replies(void **state) {
   assert_string_equal(say(fx, "clear operational mode"),
                       "No longer controlling the operational mode. Current operational mode: 'manual'.");
   assert_false(fx->st.opmode_by_dashboard);
+  assert_string_equal(say(fx, "get operational mode"), "NONE");  /* no mode password */
   assert_string_equal(say(fx, "restart safety"), "Restarting safety");
   assert_int_equal(fx->act.ctrl[0], URT_CTRL_POWER_OFF);
   assert_true(fx->act.restart_safety);
@@ -491,6 +492,18 @@ static void test_dashboard__local_control_refuses_state_changes(void **state) {
   assert_string_equal(say(fx, "robotmode"), "Robotmode: RUNNING");
   assert_string_equal(say(fx, "programState"), "STOPPED wait_program.urp");
   assert_string_equal(say(fx, "popup hi"), "showing popup");
+}
+
+// Remote control disabled in Settings (URSim's default, URCL's CI): not "in remote control",
+// yet nothing is refused.
+static void test_dashboard__remote_control_off_refuses_nothing(void **state) {
+  fixture_t *fx = *state;
+  running_with_program(fx);
+  fx->st.remote_control_off = 1;
+  assert_string_equal(say(fx, "is in remote control"), "false");
+  assert_string_equal(say(fx, "play"), "Starting program");
+  assert_string_equal(say(fx, "stop"), "Stopped");
+  assert_string_equal(say(fx, "power off"), "Powering off");
 }
 
 static void test_dashboard__version_gates_follow_the_emulated_controller(void **state) {
@@ -650,6 +663,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_dashboard__load_resolves_inside_the_programs_directory, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__load_refuses_escapes_and_bad_files, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__local_control_refuses_state_changes, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_dashboard__remote_control_off_refuses_nothing, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__version_gates_follow_the_emulated_controller, setup, teardown),
       cmocka_unit_test(test_dashboard_framer__splits_lines_across_chunks),
       cmocka_unit_test_setup_teardown(test_dashboard_framer__overlong_line_resyncs_at_newline, setup, teardown),

@@ -94,6 +94,9 @@ enum {
 
 typedef struct urt_dashboard_state {
   int remote_control;         /* e-Series: 1 remote control, 0 local (refuses state changes) */
+  int remote_control_off;     /* e-Series: the remote-control feature is disabled in Settings
+                                 (URSim's default): `is in remote control` answers false and
+                                 nothing is refused                                          */
   int program_loaded;         /* a program was loaded                                         */
   char program_display[URT_DASHBOARD_PATH_MAX]; /* as clients see it, "/programs/x.urp"      */
   char program_path[URT_DASHBOARD_PATH_MAX];    /* resolved host path (realpath)             */

@@ -27,6 +27,7 @@ typedef struct urt_emulator_config {
   urt_version_t version;     /* the emulated controller                              */
   const char *programs_dir;  /* where dashboard `load` finds programs; NULL: none       */
   int local_control;         /* e-Series: 1 = local control (dashboard refuses changes) */
+  int remote_control_off;    /* e-Series: remote control disabled (urt_dashboard_state_t) */
   const char *serial_number; /* digits; NULL: "20235501783"                            */
   int rt_priority;           /* > 0: SCHED_FIFO priority of the I/O and script threads
                                 (best effort)                                              */

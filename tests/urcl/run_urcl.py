@@ -1,0 +1,641 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Run UR's own client library (URCL 2.14.0) against urtwin: its integration tests and its
+examples, once with urtwin claiming e-Series 5.x and once CB3 3.15 (issue 9, Acceptance).
+
+What it does, per controller version:
+  * copies URCL's source tree into the build folder (its tests write ../test_artifacts and
+    urscript.XXXXXX beside themselves, its examples read relative resource paths; the shared
+    copy stays read-only) and uses the copy's tests/resources/dockerursim/programs/<series>/
+    as urtwin's --programs-dir;
+  * starts one urtwin bound to 127.0.0.2 (URCL's default robot address in our patched copy,
+    ../shared/clients/PATCHES.md), so that tests expecting nothing on 127.0.0.1 and URCL's own
+    fake servers can run;
+  * runs every test of every integration binary (tests/CMakeLists.txt: the _headless and
+    _urcap variants with --headless true|false) one at a time, as ctest would, each bounded by
+    a timeout and read back from gtest's JSON; then each example with its arguments
+    (external_control.md §4.2), bounded too.
+Each version runs in its own network namespace when the machine allows it (unshare -n, as
+root): only a loopback device exists there, so nothing a test or URCL's servers (they bind
+0.0.0.0) do can reach beyond this host, the two versions can run side by side, and other
+emulators on the host do not collide with URCL's fixed ports. Otherwise they run one after the
+other in the host's namespace. Everything runs under flock /tmp/urcl.lock.
+
+Tests in exclusions.txt are never run (the reason is printed). With --check, the run fails
+if any test listed in expected_pass.txt did not pass; tests that pass and are not listed are
+printed, so the list can ratchet up (--write-expected rewrites it from this run).
+
+If ../shared (URCL's sources) is absent, everything is skipped with a message.
+"""
+
+import argparse
+import fcntl
+import fnmatch
+import json
+import os
+import re
+import shutil
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+HERE = os.path.dirname(os.path.abspath(__file__))
+URCL_DIR = os.path.join("shared", "clients", "Universal_Robots_Client_Library-2.14.0")
+
+
+def default_src():
+    """../shared beside the checkout (/work/main), or beside its parent (a worktree in
+    /work/wt/<name>)."""
+    for up in ("..", os.path.join("..", "..")):
+        path = os.path.normpath(os.path.join(ROOT, up, URCL_DIR))
+        if os.path.isdir(path):
+            return path
+    return os.path.normpath(os.path.join(ROOT, "..", URCL_DIR))
+
+
+ROBOT_IP = "127.0.0.2"
+LOCK = "/tmp/urcl.lock"
+
+# controller version name -> (urtwin --controller-version, URCL programs folder)
+VERSIONS = {"e-series": ("5.19", "e-series"), "cb3": ("3.15", "cb3")}
+
+# integration binaries (tests/CMakeLists.txt), their extra arguments and per-test timeout [s]
+BINARIES = [
+    ("rtde_tests", [], 60),
+    ("dashboard_client_g5_tests", [], 60),
+    ("primary_client_test_headless", [], 60),
+    ("ur_driver_tests_headless", ["--headless", "true"], 60),
+    ("ur_driver_tests_urcap", ["--headless", "false"], 60),
+    ("external_control_program_tests_headless", ["--headless", "true"], 60),
+    ("external_control_program_tests_urcap", ["--headless", "false"], 60),
+    ("spline_tests_headless", ["--headless", "true"], 120),
+    ("spline_tests_urcap", ["--headless", "false"], 120),
+    ("instruction_executor_test_headless", ["--headless", "true"], 60),
+    ("instruction_executor_test_urcap", ["--headless", "false"], 60),
+    ("trajectory_streaming_tests_headless", ["--headless", "true"], 60),
+    ("ur_driver_deprecated_constructor_test", [], 60),
+]
+
+# examples (external_control.md §4.2): arguments after the robot address, timeout [s]
+EXAMPLES = [
+    ("primary_pipeline_example", ["2"], 30),
+    ("primary_pipeline_calibration_example", [], 30),
+    ("rtde_client_example", ["5"], 30),
+    ("dashboard_example", [], 90),
+    ("send_script", [], 60),
+    ("driver_example", [], 90),
+    ("spline_example", [], 150),
+    ("trajectory_point_interface_example", [], 90),
+    ("instruction_executor", [], 120),
+    ("trajectory_streaming_example", [], 90),
+    ("script_command_interface_example", ["10"], 60),
+    ("freedrive_example", ["5"], 45),
+    ("force_mode_example", ["5"], 45),
+    ("tool_contact_example", ["5"], 45),
+    ("direct_torque_control_example", ["5"], 45),
+    ("external_fts_through_rtde", ["5"], 45),
+    ("script_sender_example", ["2"], 30),  # no robot involved: a server on 50002 for 2 s
+]
+
+PORTS = (30001, 30002, 30003, 30004, 29999)
+
+
+# ---------------------------------------------------------------------------------------------
+# lists
+
+
+def read_patterns(path):
+    """exclusions.txt: `<kind> <pattern> <reason…>` per line, # comments. kind is `exclude`
+    (never run), `norobot` (runs with urtwin stopped: it serves the robot's ports itself) or
+    `known` (runs; when it fails, it is listed with this cause outside urtwin)."""
+    out = []
+    if not os.path.exists(path):
+        return out
+    with open(path) as f:
+        for line in f:
+            line = line.strip()
+            if not line or line.startswith("#"):
+                continue
+            kind, pattern, reason = (line.split(None, 2) + ["", ""])[:3]
+            if kind not in ("exclude", "norobot", "known"):
+                raise SystemExit(f"{path}: unknown kind {kind!r} in: {line}")
+            out.append((kind, pattern, reason))
+    return out
+
+
+def match(patterns, test_id, kind):
+    for k, pattern, reason in patterns:
+        if k == kind and fnmatch.fnmatchcase(test_id, pattern):
+            return reason
+    return None
+
+
+def read_expected(path):
+    if not os.path.exists(path):
+        return set()
+    with open(path) as f:
+        return {l.strip() for l in f if l.strip() and not l.startswith("#")}
+
+
+# ---------------------------------------------------------------------------------------------
+# one controller version (runs inside its network namespace when there is one)
+
+
+def loopback_up():
+    """Bring lo up in a fresh network namespace (SIOCSIFFLAGS; no iproute2 needed)."""
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        IFF_UP, IFF_LOOPBACK, IFF_RUNNING = 0x1, 0x8, 0x40
+        ifr = struct.pack("16sH14s", b"lo", IFF_UP | IFF_LOOPBACK | IFF_RUNNING, b"")
+        fcntl.ioctl(s, 0x8914, ifr)
+    finally:
+        s.close()
+
+
+def wait_port(host, port, timeout):
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        try:
+            with socket.create_connection((host, port), timeout=0.2):
+                return True
+        except OSError:
+            time.sleep(0.02)
+    return False
+
+
+def realtime_permitted():
+    try:
+        return subprocess.run(["chrt", "-f", "1", "true"], capture_output=True,
+                              timeout=5).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+
+
+class Urtwin:
+    def __init__(self, urtwin, version, programs, log_path):
+        self.args = [urtwin, "--config", os.path.join(ROOT, "config", "ur5.yaml"),
+                     "--bind", ROBOT_IP, "--controller-version", version,
+                     "--programs-dir", programs, "--stats-every", "0"]
+        if version.startswith("5."):
+            # as URCL's CI URSim: remote control disabled in Settings (the factory default), so
+            # `is in remote control` answers false and the dashboard refuses nothing
+            self.args += ["--no-remote-control"]
+        if os.environ.get("URT_TEST_RT", "1") != "0" and realtime_permitted():
+            self.args += ["--rt-priority", "80"]
+        self.log_path = log_path
+        self.proc = None
+        self.restarts = 0
+
+    def start(self):
+        log = open(self.log_path, "a")
+        log.write(f"---- start: {' '.join(self.args)}\n")
+        log.flush()
+        self.proc = subprocess.Popen(self.args, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT)
+        log.close()
+        for port in PORTS:
+            if not wait_port(ROBOT_IP, port, 10.0):
+                self.stop()
+                raise SystemExit(f"urtwin did not open {ROBOT_IP}:{port} (log: {self.log_path})")
+
+    def alive(self):
+        return self.proc is not None and self.proc.poll() is None
+
+    def stop(self):
+        if self.proc is None:
+            return
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.proc = None
+
+
+def run_bounded(cmd, cwd, timeout, log_path, stdin=subprocess.DEVNULL):
+    """Run cmd (own process group) with output to log_path; returns (returncode or None on
+    timeout, seconds)."""
+    t0 = time.monotonic()
+    with open(log_path, "w") as log:
+        p = subprocess.Popen(cmd, cwd=cwd, stdout=log, stderr=subprocess.STDOUT, stdin=stdin,
+                             start_new_session=True)
+        try:
+            rc = p.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+            rc = None
+    return rc, time.monotonic() - t0
+
+
+def list_tests(binary):
+    out = subprocess.run([binary, "--gtest_list_tests"], capture_output=True, text=True,
+                         timeout=30).stdout
+    names, suite = [], None
+    for line in out.splitlines():
+        if not line.strip():
+            continue
+        if not line.startswith(" "):
+            suite = line.split()[0]
+        else:
+            names.append(suite + line.split()[0])
+    return names
+
+
+RESULT = re.compile(r"^\[\s*(OK|FAILED|SKIPPED)\s*\] (\S+)(?: \((\d+) ms\))?")
+SUITE_FAILED = re.compile(r"^\[\s*FAILED\s*\] (\S+): SetUpTestSuite or TearDownTestSuite")
+
+
+def watch_gtest(cmd, cwd, timeout, log_path, got):
+    """Run a gtest binary, following its output: fills got[test] with status, seconds and
+    message; kills the process when a test runs longer than timeout."""
+    status_of = {"OK": "passed", "FAILED": "failed", "SKIPPED": "skipped"}
+    current, started, pos, notes = None, 0.0, 0, []
+    suite_failed = {}
+    last_failure = []
+    with open(log_path, "w") as log:
+        p = subprocess.Popen(cmd, cwd=cwd, stdout=log, stderr=subprocess.STDOUT,
+                             stdin=subprocess.DEVNULL, start_new_session=True)
+
+        def scan():
+            nonlocal current, started, pos
+            with open(log_path, errors="replace") as f:
+                f.seek(pos)
+                chunk = f.read()
+            # only whole lines
+            cut = chunk.rfind("\n") + 1
+            pos += len(chunk[:cut].encode("utf-8", "replace"))
+            for line in chunk[:cut].splitlines():
+                if line.startswith("[ RUN      ] "):
+                    current, started = line[13:].strip(), time.monotonic()
+                    last_failure.clear()
+                    continue
+                m = SUITE_FAILED.match(line)
+                if m:
+                    suite_failed[m.group(1)] = " | ".join(notes[-2:])
+                    continue
+                m = RESULT.match(line)
+                if m and m.group(3) is not None and m.group(2) not in got:
+                    rec = {"status": status_of[m.group(1)],
+                           "seconds": round(time.monotonic() - started, 2)}
+                    if last_failure:
+                        rec["message"] = " | ".join(last_failure)[:400]
+                    got[m.group(2)] = rec
+                    if m.group(2) == current:
+                        current = None
+                    continue
+                if "Failure" in line or "exception" in line.lower():
+                    (last_failure if current else notes).append(line.strip()[:200])
+
+        rc = None
+        while rc is None:
+            try:
+                rc = p.wait(timeout=0.25)
+            except subprocess.TimeoutExpired:
+                pass
+            scan()
+            if rc is None and current and time.monotonic() - started > timeout:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+                got[current] = {"status": "timeout", "seconds": round(timeout, 1),
+                                "message": f"killed after {timeout} s; " + last_lines(log_path)}
+                current = None
+                return
+        scan()
+    if current and current not in got:
+        got[current] = {"status": "crashed", "seconds": round(time.monotonic() - started, 2),
+                        "message": f"exit {rc}; " + last_lines(log_path)}
+    # a suite whose SetUpTestSuite failed: gtest marks its tests skipped, yet they failed
+    for suite, why in suite_failed.items():
+        for test, rec in got.items():
+            if test.startswith(suite + ".") and rec["status"] == "skipped":
+                rec["status"] = "failed"
+                rec["message"] = "SetUpTestSuite failed: " + why
+
+
+def failures_from_json(json_path, got):
+    """Take each failed test's first failure message from gtest's JSON, when it was written."""
+    try:
+        with open(json_path) as f:
+            data = json.load(f)
+    except (OSError, ValueError):
+        return
+    for suite in data.get("testsuites", []):
+        for t in suite.get("testsuite", []):
+            key = f"{suite.get('name')}.{t.get('name')}"
+            if key in got and t.get("failures") and got[key]["status"] == "failed":
+                got[key]["message"] = t["failures"][0].get("failure", "")[:400]
+
+
+def last_lines(path, n=3):
+    try:
+        with open(path, errors="replace") as f:
+            lines = [l.rstrip() for l in f if l.strip()]
+    except OSError:
+        return ""
+    return " | ".join(lines[-n:])[-400:]
+
+
+def run_version(args, name):
+    version, series = VERSIONS[name]
+    if args.netns:
+        loopback_up()
+    work = os.path.join(args.work, name)
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(os.path.dirname(work), exist_ok=True)
+    # a writable copy of the source tree: tests and examples write and read beside themselves
+    subprocess.run(["cp", "-r", "--no-preserve=mode", args.src, work], check=True)
+    os.makedirs(os.path.join(work, "test_artifacts"), exist_ok=True)
+    logs = os.path.join(work, "logs")
+    os.makedirs(logs)
+    programs = os.path.join(work, "tests", "resources", "dockerursim", "programs", series)
+    bindir = os.path.join(args.build, "tests")
+    exdir = os.path.join(args.build, "examples")
+    patterns = read_patterns(args.exclusions)
+    results = {}
+    robot = Urtwin(args.urtwin, version, programs, os.path.join(logs, "urtwin.log"))
+    robot.start()
+    filt = re.compile(args.filter) if args.filter else None
+
+    def after(test_id, rec):
+        if robot.proc is not None and not robot.alive():
+            rec["note"] = "urtwin exited during this test; restarted"
+            robot.restarts += 1
+            robot.start()
+        results[test_id] = rec
+        if args.verbose:
+            print(f"  {name}/{test_id}: {rec['status']} ({rec['seconds']:.1f} s)", flush=True)
+
+    def run_batch(binary, extra, timeout, tests):
+        """All of tests in one process, as `./binary` would (a suite's SetUpTestSuite, e.g. the
+        robot connection, runs once), watched through gtest's progress lines: a test that
+        runs longer than timeout is killed and recorded, a crash is recorded, and the tests
+        after it run in a new process."""
+        path = os.path.join(bindir, binary)
+        got = {}
+        remaining = list(tests)
+        rounds = 0
+        while remaining:
+            rounds += 1
+            stem = os.path.join(logs, f"{binary}.{rounds}")
+            cmd = [path, "--gtest_filter=" + ":".join(remaining),
+                   f"--gtest_output=json:{stem}.json", "--robot_ip", ROBOT_IP, *extra]
+            before = len(got)
+            watch_gtest(cmd, os.path.join(work, "tests"), timeout, stem + ".log", got)
+            failures_from_json(stem + ".json", got)
+            if robot.proc is not None and not robot.alive():
+                last = next(reversed(got), None)
+                if last:
+                    got[last]["note"] = "urtwin exited during this test; restarted"
+                robot.restarts += 1
+                robot.start()
+            remaining = [t for t in remaining if t not in got]
+            if len(got) == before:  # the binary dies before its first test: stop there
+                for t in remaining:
+                    got[t] = {"status": "crashed", "seconds": 0.0,
+                              "message": "binary exited before running it; " +
+                                         last_lines(stem + ".log")}
+                remaining = []
+        for test in tests:
+            rec = got[test]
+            test_id = f"{binary}/{test}"
+            known = match(patterns, test_id, "known")
+            if known and rec["status"] != "passed":
+                rec["known"] = known
+            results[test_id] = rec
+            if args.verbose:
+                print(f"  {name}/{test_id}: {rec['status']} ({rec['seconds']:.1f} s)", flush=True)
+
+    try:
+        later = []
+        for binary, extra, timeout in BINARIES:
+            path = os.path.join(bindir, binary)
+            if not os.path.exists(path):
+                raise SystemExit(f"{path} missing: build URCL first (make urcl)")
+            now = []
+            for test in list_tests(path):
+                test_id = f"{binary}/{test}"
+                if filt and not filt.search(test_id):
+                    continue
+                reason = match(patterns, test_id, "exclude")
+                if reason:
+                    results[test_id] = {"status": "excluded", "seconds": 0.0, "note": reason}
+                elif match(patterns, test_id, "norobot"):
+                    later.append((binary, extra, timeout, test))
+                else:
+                    now.append(test)
+            if now:
+                run_batch(binary, extra, timeout, now)
+        if later:
+            # URCL's fake-server tests serve the robot's ports themselves: urtwin stopped
+            robot.stop()
+            for binary, extra, timeout, test in later:
+                run_batch(binary, extra, timeout, [test])
+                results[f"{binary}/{test}"]["note"] = "run with urtwin stopped"
+            robot.start()
+        if args.examples:
+            for example, extra, timeout in EXAMPLES:
+                test_id = f"examples/{example}"
+                if filt and not filt.search(test_id):
+                    continue
+                reason = match(patterns, test_id, "exclude")
+                if reason:
+                    results[test_id] = {"status": "excluded", "seconds": 0.0, "note": reason}
+                    continue
+                lpath = os.path.join(logs, f"example_{example}.log")
+                rc, secs = run_bounded([os.path.join(exdir, example), ROBOT_IP, *extra], work,
+                                       timeout, lpath)
+                status = "passed" if rc == 0 else "timeout" if rc is None else "failed"
+                rec = {"status": status, "seconds": round(secs, 2)}
+                if rc != 0:
+                    rec["message"] = (f"killed after {timeout} s" if rc is None else
+                                      f"exit {rc}") + "; " + last_lines(lpath)
+                known = match(patterns, test_id, "known")
+                if known and status != "passed":
+                    rec["known"] = known
+                after(test_id, rec)
+    finally:
+        robot.stop()
+    return {"version": version, "series": series, "urtwin_restarts": robot.restarts,
+            "results": results}
+
+
+# ---------------------------------------------------------------------------------------------
+# the whole run
+
+
+def netns_available():
+    if os.environ.get("URT_URCL_NETNS", "1") == "0":
+        return False
+    try:
+        return subprocess.run(["unshare", "-n", "true"], capture_output=True,
+                              timeout=10).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+
+
+def suite_of(test_id):
+    return test_id.split("/", 1)[0]
+
+
+def summarise(parts):
+    """Per version and suite: counts by status."""
+    table = {}
+    for name, part in parts.items():
+        for test_id, rec in part["results"].items():
+            row = table.setdefault(name, {}).setdefault(suite_of(test_id), {})
+            row[rec["status"]] = row.get(rec["status"], 0) + 1
+    return table
+
+
+def print_table(table):
+    statuses = ["passed", "failed", "timeout", "crashed", "skipped", "excluded"]
+    for name, suites in table.items():
+        print(f"\nURCL against urtwin as {name}:")
+        print(f"  {'suite':44s} " + " ".join(f"{s:>8s}" for s in statuses))
+        total = {s: 0 for s in statuses}
+        for suite, row in suites.items():
+            print(f"  {suite:44s} " + " ".join(f"{row.get(s, 0):8d}" for s in statuses))
+            for s in statuses:
+                total[s] += row.get(s, 0)
+        ran = sum(total[s] for s in statuses if s != "excluded")
+        print(f"  {'total':44s} " + " ".join(f"{total[s]:8d}" for s in statuses) +
+              f"   ({total['passed']} of {ran} run pass)")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--src", default=os.environ.get("URT_URCL_SRC") or default_src())
+    ap.add_argument("--build", default=os.path.join(ROOT, "build", "urcl", "build"),
+                    help="URCL's CMake build folder")
+    ap.add_argument("--urtwin", default=os.path.join(ROOT, "build", "tools", "urtwin"))
+    ap.add_argument("--work", default=os.path.join(ROOT, "build", "urcl", "work"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "build", "urcl", "summary.json"))
+    ap.add_argument("--versions", default="e-series,cb3")
+    ap.add_argument("--filter", help="regex over <binary>/<Suite.test> and examples/<name>")
+    ap.add_argument("--no-examples", dest="examples", action="store_false")
+    ap.add_argument("--exclusions", default=os.path.join(HERE, "exclusions.txt"))
+    ap.add_argument("--expected", default=os.path.join(HERE, "expected_pass.txt"))
+    ap.add_argument("--check", action="store_true",
+                    help="fail if a test in --expected did not pass")
+    ap.add_argument("--write-expected", action="store_true",
+                    help="rewrite --expected with the tests that passed in this run")
+    ap.add_argument("--jobs", type=int, default=2, help="versions run side by side (netns only)")
+    ap.add_argument("--verbose", "-v", action="store_true")
+    ap.add_argument("--one", help=argparse.SUPPRESS)       # child: run this version only
+    ap.add_argument("--netns", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+
+    if args.one:
+        part = run_version(args, args.one)
+        with open(args.out, "w") as f:
+            json.dump(part, f, indent=1)
+        return 0
+
+    if not os.path.isdir(args.src):
+        print(f"SKIPPED: URCL's sources are not at {args.src} (../shared absent): "
+              "URCL's integration tests and examples did not run")
+        return 0
+
+    names = [n.strip() for n in args.versions.split(",") if n.strip()]
+    for n in names:
+        if n not in VERSIONS:
+            raise SystemExit(f"unknown version {n!r}: {', '.join(VERSIONS)}")
+    os.makedirs(args.work, exist_ok=True)
+    netns = netns_available()
+    jobs = max(1, args.jobs) if netns else 1
+    print(f"URCL run: versions {', '.join(names)}; "
+          f"{'one network namespace each' if netns else 'host network namespace'}, "
+          f"{jobs} at a time; waiting for {LOCK}", flush=True)
+
+    lock = open(LOCK, "w")
+    fcntl.flock(lock, fcntl.LOCK_EX)
+    t0 = time.monotonic()
+    parts, pending, running = {}, list(names), []
+    try:
+        while pending or running:
+            while pending and len(running) < jobs:
+                n = pending.pop(0)
+                part_path = os.path.join(args.work, f"{n}.part.json")
+                if os.path.exists(part_path):
+                    os.unlink(part_path)
+                cmd = [sys.executable, os.path.abspath(__file__), "--one", n, "--out", part_path,
+                       "--src", args.src, "--build", args.build, "--urtwin", args.urtwin,
+                       "--work", args.work, "--exclusions", args.exclusions]
+                if args.filter:
+                    cmd += ["--filter", args.filter]
+                if not args.examples:
+                    cmd += ["--no-examples"]
+                if args.verbose:
+                    cmd += ["--verbose"]
+                if netns:
+                    cmd = ["unshare", "-n", *cmd, "--netns"]
+                running.append((n, part_path, subprocess.Popen(cmd), time.monotonic()))
+            time.sleep(0.5)
+            for item in list(running):
+                n, part_path, p, started = item
+                if p.poll() is None:
+                    continue
+                running.remove(item)
+                if p.returncode != 0 or not os.path.exists(part_path):
+                    raise SystemExit(f"the {n} run failed (exit {p.returncode})")
+                with open(part_path) as f:
+                    parts[n] = json.load(f)
+                parts[n]["seconds"] = round(time.monotonic() - started, 1)
+    finally:
+        for _, _, p, _ in running:
+            p.kill()
+        fcntl.flock(lock, fcntl.LOCK_UN)
+        lock.close()
+    wall = time.monotonic() - t0
+
+    table = summarise(parts)
+    print_table(table)
+    for n, part in parts.items():
+        print(f"\n{n}: {part['seconds']} s, urtwin restarts: {part['urtwin_restarts']}")
+        for test_id, rec in part["results"].items():
+            if rec["status"] not in ("passed", "excluded", "skipped"):
+                cause = f" [known: {rec['known']}]" if "known" in rec else ""
+                print(f"  {rec['status']:8s} {test_id}{cause}: {rec.get('message', '')[:160]}")
+    print(f"\nwall time of the URCL run: {wall:.0f} s")
+
+    passed = {f"{n}/{t}" for n, part in parts.items() for t, rec in part["results"].items()
+              if rec["status"] == "passed"}
+    ran_ids = {f"{n}/{t}" for n, part in parts.items() for t in part["results"]}
+    expected = read_expected(args.expected)
+    # only what this run covered is judged (a --filter run judges its subset)
+    missing = sorted(t for t in expected if t in ran_ids and t not in passed)
+    new = sorted(passed - expected)
+    summary = {"wall_seconds": round(wall, 1), "netns": netns, "jobs": jobs,
+               "table": table, "versions": parts, "expected_failed": missing, "newly_passing": new}
+    os.makedirs(os.path.dirname(args.out), exist_ok=True)
+    with open(args.out, "w") as f:
+        json.dump(summary, f, indent=1)
+    print(f"summary: {args.out}")
+    if new:
+        print(f"\n{len(new)} tests pass that {os.path.relpath(args.expected, ROOT)} does not list "
+              "(add them: --write-expected):")
+        for t in new:
+            print(f"  {t}")
+    if args.write_expected:
+        keep = sorted((expected - ran_ids) | passed)
+        with open(args.expected, "w") as f:
+            f.write("# URCL tests and examples that pass against urtwin (version/binary/test),\n"
+                    "# measured by tests/urcl/run_urcl.py; make test fails if one of them fails.\n")
+            f.write("".join(t + "\n" for t in keep))
+        print(f"wrote {len(keep)} tests to {args.expected}")
+    if args.check and missing:
+        print(f"\nFAILED: {len(missing)} tests listed in {os.path.relpath(args.expected, ROOT)} "
+              "did not pass:")
+        for t in missing:
+            print(f"  {t}")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
