@@ -46,35 +46,6 @@ static void retool(const double pose[6], const double from[6], const double to[6
 
 //---- getters ----
 
-static int b_get_steptime(vm *V, const us_node *n, sv *a, sv *out) { *out = mk_float(urt__us_snap(V)->period); return X_OK; }
-/* get_joint_positions(): the old name of get_actual_joint_positions (URCL's script calls it) */
-static int b_get_joint_positions(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->q, 6, out); }
-static int b_get_target_tcp_speed(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->tcp_speed_target, 6, out); }
-static int b_get_target_joint_accelerations(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->qdd_target, 6, out); }
-static int b_get_actual_joint_accelerations(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->qdd, 6, out); }
-/* the joint output torques, as ur_rtde's native path reports them (RTDE actual_joint_torques) */
-static int b_get_joint_torques(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->tau, 6, out); }
-static int b_get_tcp_force(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->tcp_force, 6, out); }
-static int b_get_target_payload(vm *V, const us_node *n, sv *a, sv *out) { *out = mk_float(urt__us_snap(V)->payload_mass); return X_OK; }
-static int b_get_target_payload_cog(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->payload_cog, 3, out); }
-
-/* force(): the size of the force part of the TCP wrench (UR: the norm of Fx, Fy, Fz) */
-static int b_force(vm *V, const us_node *n, sv *a, sv *out) {
-  const double *f = urt__us_snap(V)->tcp_force;
-  *out = mk_float(sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]));
-  return X_OK;
-}
-
-static int b_get_tool_accelerometer_reading(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->tool_accel, 3, out); }
-
-static int b_get_joint_temp(vm *V, const us_node *n, sv *a, sv *out) {
-  int64_t j;
-  if (urt__us_arg_int(V, n, a, 0, &j) != X_OK) return X_ERR;
-  if (j < 0 || j >= URT_NJ) return urt__us_fail(V, n, "get_joint_temp: joint %lld outside 0..5", (long long)j);
-  *out = mk_float(urt__us_snap(V)->temperature[j]);
-  return X_OK;
-}
-
 /* get_actual_joint_positions_history(steps=0): the actual joint positions `steps` controller
  * ticks before the newest snapshot (the controller keeps URT_LOOP_HISTORY ticks) */
 static int b_get_actual_joint_positions_history(vm *V, const us_node *n, sv *a, sv *out) {
@@ -95,12 +66,26 @@ static int b_get_actual_joint_positions_history(vm *V, const us_node *n, sv *a, 
   return vec_out(V, n, past.q, 6, out);
 }
 
-/* the flange: the actual TCP pose with the active TCP offset taken off */
-static int b_get_actual_tool_flange_pose(vm *V, const us_node *n, sv *a, sv *out) {
-  const urt_snapshot_t *s = urt__us_snap(V);
-  double zero[6] = {0}, p[6];
-  retool(s->tcp_pose, s->tcp_offset, zero, p);
-  *out = mk_pose(p);
+
+/* get_joint_positions(): the old name of get_actual_joint_positions (URCL's script calls it) */
+static int b_get_joint_positions(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->q, 6, out); }
+static int b_get_actual_joint_accelerations(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->qdd, 6, out); }
+static int b_get_tcp_force(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->tcp_force, 6, out); }
+
+/* force(): the size of the force part of the TCP wrench (UR: the norm of Fx, Fy, Fz) */
+static int b_force(vm *V, const us_node *n, sv *a, sv *out) {
+  const double *f = urt__us_snap(V)->tcp_force;
+  *out = mk_float(sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]));
+  return X_OK;
+}
+
+static int b_get_tool_accelerometer_reading(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->tool_accel, 3, out); }
+
+static int b_get_joint_temp(vm *V, const us_node *n, sv *a, sv *out) {
+  int64_t j;
+  if (urt__us_arg_int(V, n, a, 0, &j) != X_OK) return X_ERR;
+  if (j < 0 || j >= URT_NJ) return urt__us_fail(V, n, "get_joint_temp: joint %lld outside 0..5", (long long)j);
+  *out = mk_float(urt__us_snap(V)->temperature[j]);
   return X_OK;
 }
 
@@ -148,14 +133,6 @@ static int b_get_inverse_kin(vm *V, const us_node *n, sv *a, sv *out) {
   return vec_out(V, n, q, 6, out);
 }
 
-static int b_get_inverse_kin_has_solution(vm *V, const us_node *n, sv *a, sv *out) {
-  double q[6];
-  bool found = false;
-  if (ik(V, n, a, q, &found) != X_OK) return X_ERR;
-  *out = mk_bool(found);
-  return X_OK;
-}
-
 /* get_forward_kin(q, tcp): the pose of tool tcp (absent: the active TCP) at q (absent: actual) */
 static int b_get_forward_kin(vm *V, const us_node *n, sv *a, sv *out) {
   double q[6], tcp[6], p[6], o[6];
@@ -170,55 +147,7 @@ static int b_get_forward_kin(vm *V, const us_node *n, sv *a, sv *out) {
   return X_OK;
 }
 
-/* is_within_safety_limits(pose or q): joint positions inside the model's limits (a pose via
- * inverse kinematics near the actual joints) */
-static int b_is_within_safety_limits(vm *V, const us_node *n, sv *a, sv *out) {
-  const urt_script_host_t *h = V->h->host;
-  const urt_model_t *m = h->model ? h->model(h->ctx) : NULL;
-  if (!m) return urt__us_fail(V, n, "is_within_safety_limits: the robot model is not available");
-  double x[6], q[6];
-  bool is_pose;
-  if (urt__us_arg_vec6(V, n, a, 0, x, &is_pose) != X_OK) return X_ERR;
-  if (is_pose) {
-    if (!h->inverse_kinematics || h->inverse_kinematics(h->ctx, x, urt__us_snap(V)->q, q) != 0) {
-      *out = mk_bool(false);
-      return X_OK;
-    }
-  } else {
-    memcpy(q, x, sizeof q);
-  }
-  bool ok = true;
-  for (int j = 0; j < URT_NJ; j++) ok = ok && q[j] >= m->joint[j].q_min && q[j] <= m->joint[j].q_max;
-  *out = mk_bool(ok);
-  return X_OK;
-}
-
-/* get_coriolis_and_centrifugal_torques(): C(q, q̇) q̇ of the model at the actual state, the
- * inverse dynamics at zero acceleration less gravity */
-static int b_get_coriolis_and_centrifugal_torques(vm *V, const us_node *n, sv *a, sv *out) {
-  const urt_script_host_t *h = V->h->host;
-  const urt_model_t *m = h->model ? h->model(h->ctx) : NULL;
-  if (!m) return urt__us_fail(V, n, "get_coriolis_and_centrifugal_torques: the robot model is not available");
-  const urt_snapshot_t *s = urt__us_snap(V);
-  double zero[URT_NJ] = {0}, tau[URT_NJ], g[URT_NJ];
-  urt_arm_rnea(m, s->q, s->qd, zero, tau);
-  urt_arm_gravity(m, s->q, g);
-  for (int j = 0; j < URT_NJ; j++) tau[j] -= g[j];
-  return vec_out(V, n, tau, 6, out);
-}
-
 //---- settings ----
-
-/* set_gravity(d): d points away from the earth (UR); the controller takes the gravity itself */
-static int b_set_gravity(vm *V, const us_node *n, sv *a, sv *out) {
-  urt_ctrl_cmd_t c = {.kind = URT_CTRL_SET_GRAVITY};
-  if (a[0].t != V_LIST || a[0].n != 3) return urt__us_fail(V, n, "Type error: set_gravity takes a list of 3 numbers");
-  for (int j = 0; j < 3; j++) {
-    if (!is_num(&a[0].u.l[j]) || !isfinite(num(&a[0].u.l[j]))) return urt__us_fail(V, n, "Type error: set_gravity: element %d is not a number", j);
-    c.pose[j] = -num(&a[0].u.l[j]);
-  }
-  return urt__us_submit(V, n, &c);
-}
 
 /* set_tool_voltage(voltage): 0, 12 or 24 V at the tool connector (RTDE tool_output_voltage) */
 static int b_set_tool_voltage(vm *V, const us_node *n, sv *a, sv *out) {
@@ -227,34 +156,6 @@ static int b_set_tool_voltage(vm *V, const us_node *n, sv *a, sv *out) {
   if (c.value != 0 && c.value != 12 && c.value != 24) {
     return urt__us_fail(V, n, "set_tool_voltage: %g V is not 0, 12 or 24", c.value);
   }
-  return urt__us_submit(V, n, &c);
-}
-
-/* three numbers from a list or a pose's position */
-static int vec3_arg(vm *V, const us_node *n, const sv *a, int k, double x[3]) {
-  if (a[k].t == V_POSE) {
-    memcpy(x, a[k].u.p, 3 * sizeof *x);
-    return X_OK;
-  }
-  if (a[k].t != V_LIST || a[k].n != 3) return urt__us_fail(V, n, "Type error: argument %d of %.*s must be 3 numbers", k + 1, n->name->len, n->name->s);
-  for (int j = 0; j < 3; j++) {
-    if (!is_num(&a[k].u.l[j]) || !isfinite(num(&a[k].u.l[j]))) return urt__us_fail(V, n, "Type error: argument %d of %.*s: element %d is not a number", k + 1, n->name->len, n->name->s, j);
-    x[j] = num(&a[k].u.l[j]);
-  }
-  return X_OK;
-}
-
-/* set_target_payload(m, cog, inertia=[0…], transition_time=0) */
-static int b_set_target_payload(vm *V, const us_node *n, sv *a, sv *out) {
-  urt_ctrl_cmd_t c = {.kind = URT_CTRL_SET_PAYLOAD};
-  double t = 0;
-  if (urt__us_arg_num(V, n, a, 0, 0, &c.value) != X_OK || vec3_arg(V, n, a, 1, c.pose) != X_OK ||
-      (a[2].t != V_NONE && urt__us_arg_vec6(V, n, a, 2, c.tau, NULL) != X_OK) ||
-      urt__us_arg_num(V, n, a, 3, 0, &t) != X_OK) {
-    return X_ERR;
-  }
-  if (c.value < 0) return urt__us_fail(V, n, "set_target_payload: negative mass %g", c.value);
-  if (t < 0) return urt__us_fail(V, n, "set_target_payload: negative transition_time %g", t);
   return urt__us_submit(V, n, &c);
 }
 
@@ -290,27 +191,15 @@ static int b_popup(vm *V, const us_node *n, sv *a, sv *out) {
 
 #define P(...) {__VA_ARGS__}
 const us_builtin urt__us_builtins_client[] = {
-    {"get_steptime", b_get_steptime, 0, P(NULL)},
     {"get_joint_positions", b_get_joint_positions, 0, P(NULL)},
     {"get_actual_joint_positions_history", b_get_actual_joint_positions_history, 0, P("steps")},
-    {"get_target_tcp_speed", b_get_target_tcp_speed, 0, P(NULL)},
-    {"get_target_joint_accelerations", b_get_target_joint_accelerations, 0, P(NULL)},
     {"get_actual_joint_accelerations", b_get_actual_joint_accelerations, 0, P(NULL)},
-    {"get_joint_torques", b_get_joint_torques, 0, P(NULL)},
     {"get_tcp_force", b_get_tcp_force, 0, P(NULL)},
     {"get_joint_temp", b_get_joint_temp, 1, P("j")},
     {"force", b_force, 0, P(NULL)},
     {"get_tool_accelerometer_reading", b_get_tool_accelerometer_reading, 0, P(NULL)},
-    {"get_target_payload", b_get_target_payload, 0, P(NULL)},
-    {"get_target_payload_cog", b_get_target_payload_cog, 0, P(NULL)},
-    {"get_actual_tool_flange_pose", b_get_actual_tool_flange_pose, 0, P(NULL)},
     {"get_inverse_kin", b_get_inverse_kin, 1, P("x", "qnear", "maxPositionError", "maxOrientationError", "tcp")},
-    {"get_inverse_kin_has_solution", b_get_inverse_kin_has_solution, 1, P("pose", "qnear", "maxPositionError", "maxOrientationError", "tcp")},
     {"get_forward_kin", b_get_forward_kin, 0, P("q", "tcp")},
-    {"is_within_safety_limits", b_is_within_safety_limits, 1, P("pose")},
-    {"get_coriolis_and_centrifugal_torques", b_get_coriolis_and_centrifugal_torques, 0, P(NULL)},
-    {"set_gravity", b_set_gravity, 1, P("d")},
-    {"set_target_payload", b_set_target_payload, 2, P("m", "cog", "inertia", "transition_time")},
     {"popup", b_popup, 1, P("s", "title", "warning", "error", "blocking")},
     {"set_tool_voltage", b_set_tool_voltage, 1, P("voltage")},
 };

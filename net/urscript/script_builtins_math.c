@@ -241,23 +241,6 @@ static int b_pose_add(vm *V, const us_node *n, sv *a, sv *out) {
   return X_OK;
 }
 
-/* the inverse of pose_add: pose_add(pose_sub(p_to, p_from), p_from) == p_to */
-static int b_pose_sub(vm *V, const us_node *n, sv *a, sv *out) {
-  if (pose_args(V, n, a, 0) != X_OK || pose_args(V, n, a, 1) != X_OK) return X_ERR;
-  const double *to = a[0].u.p, *from = a[1].u.p;
-  double Rt[9], Rf[9], Rft[9], R[9], o[6];
-  urt__us_rotvec_to_mat(to + 3, Rt);
-  urt__us_rotvec_to_mat(from + 3, Rf);
-  for (int i = 0; i < 3; i++) {
-    for (int j = 0; j < 3; j++) Rft[3 * i + j] = Rf[3 * j + i];
-  }
-  mat_mul(Rft, Rt, R);
-  for (int i = 0; i < 3; i++) o[i] = to[i] - from[i];
-  mat_to_rotvec(R, o + 3);
-  *out = mk_pose(o);
-  return X_OK;
-}
-
 static int b_pose_inv(vm *V, const us_node *n, sv *a, sv *out) {
   if (pose_args(V, n, a, 0) != X_OK) return X_ERR;
   const double *p = a[0].u.p;
@@ -300,7 +283,6 @@ const us_builtin urt__us_builtins_math[] = {
     {"pose_trans", b_pose_trans, 2, P("p_from", "p_from_to")},
     {"pose_add", b_pose_add, 2, P("p_1", "p_2")},
     {"pose_inv", b_pose_inv, 1, P("p_from")},
-    {"pose_sub", b_pose_sub, 2, P("p_to", "p_from")},
 };
 #undef P
 

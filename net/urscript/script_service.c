@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/urscript/script_service.c — what the controller does for a running program every tick,
- * whatever its threads do: it records the joint positions and the TCP force (for
- * get_actual_joint_positions_history and tool_contact) and checks the RTDE watchdog set by
+ * whatever its threads do: it records the TCP force (for tool_contact) and checks the RTDE watchdog set by
  * rtde_set_watchdog. The scheduler calls urt__us_service_tick once per tick, before the threads
  * run; the builtins that read the record live here too.
  */
@@ -19,7 +18,6 @@ int urt__us_service_tick(us_service *sv, const us_hooks *h, us_err *err) {
   urt_snapshot_t s;
   host->snapshot(host->ctx, &s);
   uint64_t k = sv->n++ % US_HIST;
-  memcpy(sv->q[k], s.q, sizeof sv->q[k]);
   for (int j = 0; j < 6; j++) sv->f[k][j] = s.tcp_force[j] - sv->ft_bias[j];
 
   // rtde_set_watchdog(…, "stop"): a refresh within 1 / f (one tick of slack)
@@ -45,29 +43,6 @@ int urt__us_service_tick(us_service *sv, const us_hooks *h, us_err *err) {
 }
 
 //---- builtins ----
-
-static int list_out(vm *V, const us_node *at, const double *x, sv *out) {
-  sv *l = urt__us_salloc(V, at, 6 * sizeof *l);
-  if (!l) return X_ERR;
-  for (int k = 0; k < 6; k++) l[k] = mk_float(x[k]);
-  out->t = V_LIST;
-  out->n = 6;
-  out->u.l = l;
-  return X_OK;
-}
-
-static int b_get_actual_joint_positions_history(vm *V, const us_node *n, sv *a, sv *out) {
-  us_service *sv = urt__us_service(V);
-  int64_t steps = 0;
-  if (a[0].t != V_NONE && urt__us_arg_int(V, n, a, 0, &steps) != X_OK) return X_ERR;
-  if (steps < 0 || steps >= US_HIST) {
-    return urt__us_fail(V, n, "get_actual_joint_positions_history: %lld steps is outside 0..%d",
-                        (long long)steps, US_HIST - 1);
-  }
-  if (sv->n == 0) return list_out(V, n, urt__us_snap(V)->q, out);
-  uint64_t back = (uint64_t)steps < sv->n ? (uint64_t)steps : sv->n - 1;
-  return list_out(V, n, sv->q[(sv->n - 1 - back) % US_HIST], out);
-}
 
 /* tool_contact(direction): ticks back to just before a contact along the direction's translation
  * started, or 0 without one. A contact is a resisting force (opposite to the direction) above
@@ -146,7 +121,6 @@ static int b_rtde_set_watchdog(vm *V, const us_node *n, sv *a, sv *out) {
 
 #define P(...) {__VA_ARGS__}
 const us_builtin urt__us_builtins_service[] = {
-    {"get_actual_joint_positions_history", b_get_actual_joint_positions_history, 0, P("steps")},
     {"tool_contact", b_tool_contact, 1, P("direction")},
     {"zero_ftsensor", b_zero_ftsensor, 0, P(NULL)},
     {"rtde_set_watchdog", b_rtde_set_watchdog, 2, P("variable_name", "min_frequency", "action")},

@@ -155,10 +155,10 @@ typedef struct us_force_state {
 us_force_state *urt__us_force_state(vm *V);
 
 /* What the controller records and checks every tick for the program (script_service.c). */
-#define US_HIST 2048  /* ticks of joint-position and TCP-force history (4 s at 500 Hz) */
+#define US_HIST 2048  /* ticks of TCP-force history (4 s at 500 Hz) */
 typedef struct us_service {
   uint64_t n;                      /* ticks recorded */
-  double q[US_HIST][6], f[US_HIST][6];
+  double f[US_HIST][6];            /* TCP force per tick (tool_contact) */
   double ft_bias[6];               /* zero_ftsensor */
   bool wd_on, wd_double;           /* rtde_set_watchdog */
   int wd_reg;
