@@ -96,7 +96,6 @@ static const us_builtin kUnsupported[] = {
     // no controller state behind them yet
     {"get_target_payload_inertia", NULL, 0, P(NULL)},
     {"get_target_waypoint", NULL, 0, P(NULL)},
-    {"protective_stop", NULL, 0, P(NULL)},
 };
 #undef P
 

@@ -124,6 +124,16 @@ static int b_set_gravity(vm *V, const us_node *n, sv *a, sv *out) {
   return urt__us_submit(V, n, &c);
 }
 
+/* protective_stop(): the controller enters a protective stop now (C209A0 on the primary
+ * interface, the 5 s unlock rule: core/controller.cpp, net/server/port_script.c); the program
+ * stops with it, as a protective stop stops any program */
+static int b_protective_stop(vm *V, const us_node *n, sv *a, sv *out) {
+  urt_ctrl_cmd_t c = {.kind = URT_CTRL_PROTECTIVE_STOP};
+  // no wait here: URCL sends it as a secondary program (`sec … protective_stop() end`), which
+  // may not consume time; the stop lands at the next controller tick and stops the program
+  return urt__us_submit(V, n, &c);
+}
+
 static int b_set_target_payload(vm *V, const us_node *n, sv *a, sv *out) {
   urt_ctrl_cmd_t c = {.kind = URT_CTRL_SET_PAYLOAD};
   double t;
@@ -162,6 +172,7 @@ const us_builtin urt__us_builtins_modes[] = {
     {"servoc", b_servoc, 1, P("pose", "a", "v", "r")},
     {"direct_torque", b_direct_torque, 1, P("torque", "friction_comp")},
     {"set_gravity", b_set_gravity, 1, P("d")},
+    {"protective_stop", b_protective_stop, 0, P(NULL)},
     {"set_target_payload", b_set_target_payload, 2, P("m", "cog", "inertia", "transition_time")},
 };
 #undef P

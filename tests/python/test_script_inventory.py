@@ -31,25 +31,11 @@ RTDE_VERSIONS = [(3, 15), (5, 19), (5, 23), (10, 11)]
 # called by a client script and not run by urtwin yet: name → why, and who brings it
 MOTIONS = "issue 9 item 1 (motions and modes) brings it"
 PENDING = {
-    # motions and controller modes, item 1 of issue 9 (the controller has some of the commands;
-    # the builtins come with the motion objects)
+    # motions the controller does not have yet (item 1 of issue 9): the builtins come with them
     "movep": MOTIONS, "movec": MOTIONS, "optimovej": MOTIONS, "optimovel": MOTIONS,
-    "servoc": MOTIONS, "direct_torque": MOTIONS, "force_mode": MOTIONS,
-    "end_force_mode": MOTIONS, "force_mode_set_damping": MOTIONS,
-    "force_mode_set_gain_scaling": MOTIONS, "freedrive_mode": MOTIONS,
-    "end_freedrive_mode": MOTIONS, "teach_mode": MOTIONS, "end_teach_mode": MOTIONS,
-    "tool_contact": MOTIONS + " (tool-contact detection)",
-    # needs a check every controller tick
-    "rtde_set_watchdog": "needs a per-tick check of the register's writes (VM)",
-    # matrix values ([[…]], m[i, j]) are not URScript values in urtwin yet (VM)
-    "get_jacobian": "returns a matrix: the VM's value types",
-    "get_jacobian_time_derivative": "returns a matrix: the VM's value types",
-    "get_mass_matrix": "returns a matrix: the VM's value types",
     # no state behind them in the controller yet
     "get_target_payload_inertia": "the controller keeps no payload inertia (payload issue)",
     "get_target_waypoint": "needs the active motion's target (motions)",
-    "get_freedrive_status": "UR's singularity-distance metric (0/1/2) is not known to urtwin",
-    "protective_stop": "issue 9 item 8 (C209 protective stop)",
     # urtwin has no external force/torque sensor input
     "ft_rtde_input_enable": "no external F/T sensor input in urtwin",
     "enable_external_ft_sensor": "no external F/T sensor input in urtwin",
