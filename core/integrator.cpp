@@ -67,16 +67,52 @@ void joint_w_init(const urt_model_t* m, int j, int kind, const JointAux& aux, do
   }
 }
 
+// a = W⁻¹ r_d for the 18×18 column-major table: each row one multiply-add chain over the
+// columns in order, from zero. That is the accumulation Eigen's general matrix-vector kernel
+// uses for this size (rows 0–15 in four 4-lanes, rows 16–17 in a 2-lane), so the result is
+// the same to the bit; but the kernel's run-time blocking cost more than the arithmetic, and
+// here the 18 sums stay in registers. GCC vector types: AVX/FMA where -march has them.
+// extra_col · extra, the arm angle's input column, ends the chain as Eigen's a += s v did.
+typedef double V4 __attribute__((vector_size(32)));
+typedef double V2 __attribute__((vector_size(16)));
+static_assert(URT_NXD == 18, "drive_solve is written for 18 drive states");
+
+inline void drive_solve(const double* winv, const double* r, const double* extra_col,
+                        double extra, double* a) noexcept {
+  V4 c0 = {0.0, 0.0, 0.0, 0.0}, c1 = c0, c2 = c0, c3 = c0;
+  V2 c4 = {0.0, 0.0};
+  auto column = [&](const double* col, double b) {
+    V4 l0, l1, l2, l3;
+    V2 l4;
+    std::memcpy(&l0, col, sizeof l0);
+    std::memcpy(&l1, col + 4, sizeof l1);
+    std::memcpy(&l2, col + 8, sizeof l2);
+    std::memcpy(&l3, col + 12, sizeof l3);
+    std::memcpy(&l4, col + 16, sizeof l4);
+    c0 = l0 * b + c0;
+    c1 = l1 * b + c1;
+    c2 = l2 * b + c2;
+    c3 = l3 * b + c3;
+    c4 = l4 * b + c4;
+  };
+  for (int c = 0; c < URT_NXD; c++) {
+    column(winv + c * URT_NXD, r[c]);
+  }
+  column(extra_col, extra);
+  std::memcpy(a, &c0, sizeof c0);
+  std::memcpy(a + 4, &c1, sizeof c1);
+  std::memcpy(a + 8, &c2, sizeof c2);
+  std::memcpy(a + 12, &c3, sizeof c3);
+  std::memcpy(a + 16, &c4, sizeof c4);
+}
+
 // Partial solve of one joint's rows for a stage right-hand side r (21): a_d and e_z are the
 // parts of k_d and k_z that do not depend on k_q̇; returns c0.
 double joint_reduce(const JointW& w, const double* r, VecD& a_d, double* e_z) noexcept {
   *e_z = r[URT_X_Z] / (1.0 - w.gh * w.a_zz);
   double c0 = -w.t_z * *e_z;
   if (w.engaged) {
-    Eigen::Map<const MatD> winv(w.tab->winv);
-    Eigen::Map<const VecD> rd(r), winv_bq(w.tab->winv_bq);
-    a_d.noalias() = winv * rd;
-    a_d += (w.gh * r[URT_X_Q]) * winv_bq;
+    drive_solve(w.tab->winv, r, w.tab->winv_bq, w.gh * r[URT_X_Q], a_d.data());
     c0 += w.k_cs * a_d[URT_X_QCS] + w.c_cs * a_d[URT_X_QDCS] - w.k_cs * r[URT_X_Q];
   }
   return c0;

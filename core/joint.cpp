@@ -4,7 +4,11 @@
 #include "joint.hpp"
 
 #include "urt/data.h"
-#include "urt/drivers/friction.h"
+#include "urt/drivers/friction_inline.h"
+#include "urt/drivers/harmonic_drive_inline.h"
+#include "urt/drivers/motor_inline.h"
+#include "urt/drivers/pi_cascade_inline.h"
+#include "urt/drivers/sensors_inline.h"
 
 namespace urt::core {
 
@@ -29,7 +33,7 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
   urt_pi_cascade_in_t ci = {in.q_set, in.qd_set, in.i_ff, q_fb, qdm_fb, i_fb, in.torque};
   urt_pi_cascade_out_t co;
   if (forced == kNatural) {
-    co = urt_pi_cascade_eval(&pc, gp.ratio, &cs, &ci);
+    co = urt_pi_cascade_eval_inline(&pc, gp.ratio, &cs, &ci);
   } else {
     // affine in x: saturated signals become constants, held integrators get zero rates
     co.qdm_ref = pc.p_pos * (in.q_set - q_fb) + gp.ratio * in.qd_set;
@@ -45,9 +49,9 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
 
   // gear between the motor and the arm's joint angle, then the motor, then the sensors
   urt_harmonic_drive_ends_t ge = {ms.q_m, ms.qd_m, x[URT_X_Q], x[URT_X_QD]};
-  urt_harmonic_drive_out_t go = urt_harmonic_drive_eval(&gp, &gs, &ge);
-  urt_motor_deriv_t md = urt_motor_deriv(&m->motor[j], &ms, co.v_sup, go.t_in);
-  urt_sensors_state_t sd = urt_sensors_deriv(&m->sensors[j], &ss, ms.i, ms.qd_m, x[URT_X_Q]);
+  urt_harmonic_drive_out_t go = urt_harmonic_drive_eval_inline(&gp, &gs, &ge);
+  urt_motor_deriv_t md = urt_motor_deriv_inline(&m->motor[j], &ms, co.v_sup, go.t_in);
+  urt_sensors_state_t sd = urt_sensors_deriv_inline(&m->sensors[j], &ss, ms.i, ms.qd_m, x[URT_X_Q]);
 
   f[URT_X_I] = md.di;
   f[URT_X_XI_C] = co.d.xi_c;
@@ -108,7 +112,7 @@ double joint_rates(const urt_model_t* m, const urt_data_t* d, int j, double s, c
                    double* f, JointAux* aux) noexcept {
   drive_rhs(m, j, x, joint_input(m, d, j, s), kNatural, f, aux);
   urt_friction_state_t fs = {x[URT_X_Z]};
-  aux->fr = urt_friction_eval(&m->friction[j], &fs, x[URT_X_QD]);
+  aux->fr = urt_friction_eval_inline(&m->friction[j], &fs, x[URT_X_QD]);
   f[URT_X_Q] = x[URT_X_QD];
   f[URT_X_Z] = aux->fr.dz;
   return aux->t_cs - aux->fr.t_f;

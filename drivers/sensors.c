@@ -3,22 +3,14 @@
  * The sensor filters themselves are continuous states integrated with the drive; their
  * equations are in the header. */
 #include "urt/drivers/sensors.h"
+#include "urt/drivers/sensors_inline.h"
 
 #include <math.h>
 
 urt_sensors_state_t urt_sensors_deriv(const urt_sensors_params_t *p,
                                       const urt_sensors_state_t *s, double i, double qd_m,
                                       double q) {
-  const double two_pi = 6.283185307179586;
-  double tau_i = 1.0 / (two_pi * p->f_i);
-  double w_w = two_pi * p->f_w, w_q = two_pi * p->f_q;
-  urt_sensors_state_t d;
-  d.i_f = (i - s->i_f) / tau_i;
-  d.w = s->wd;
-  d.wd = w_w * w_w * (qd_m - s->w) - 2.0 * p->zeta_w * w_w * s->wd;
-  d.p = s->pd;
-  d.pd = w_q * w_q * (q - s->p) - 2.0 * p->zeta_q * w_q * s->pd;
-  return d;
+  return urt_sensors_deriv_inline(p, s, i, qd_m, q);
 }
 
 double urt_sensors_quantise(double x, double lsb) {

@@ -4,6 +4,7 @@
 
 #include "test_support.h"
 #include "urt/drivers/friction.h"
+#include "urt/drivers/friction_inline.h"
 
 static const urt_friction_params_t kWrist = {1, 5e6, 100, 0.5, 0.3, 2.0, 2.0, 10.0};
 
@@ -55,6 +56,25 @@ static void test_friction__disabled_is_zero(void **state) {
   assert_near(o.dz, 0.0, 0.0);
 }
 
+// The friction law's own cube root (friction_inline.h) against long double cbrtl rounded to
+// double: at most 1 ulp off, over the speeds a joint sees, and the edge cases pass through.
+static void test_friction_cbrt__is_within_one_ulp_of_cbrtl(void **state) {
+  (void)state;
+  int off = 0, n = 0;
+  for (double v = 1e-12; v < 20.0; v *= 1.0001) {
+    double a = v * v, y = urt__friction_cbrt(a), ref = (double)cbrtl((long double)a);
+    assert_true(fabs(y - ref) <= nextafter(ref, INFINITY) - ref);
+    off += y != ref;
+    n++;
+  }
+  assert_true(off * 1000 < n);  // correctly rounded but for a few in 10⁴
+  assert_true(urt__friction_cbrt(0.0) == 0.0);
+  assert_true(urt__friction_cbrt(8.0) == 2.0);
+  assert_true(urt__friction_cbrt(1e-310) == cbrt(1e-310));
+  assert_true(isinf(urt__friction_cbrt(INFINITY)));
+  assert_true(isnan(urt__friction_cbrt(NAN)));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_friction_g__is_even_and_finite_for_negative_speed),
@@ -62,6 +82,7 @@ int main(void) {
       cmocka_unit_test(test_friction__partials_match_finite_differences),
       cmocka_unit_test(test_friction_dg__stribeck_dip_is_about_minus_3_7),
       cmocka_unit_test(test_friction__disabled_is_zero),
+      cmocka_unit_test(test_friction_cbrt__is_within_one_ulp_of_cbrtl),
   };
   return cmocka_run_group_tests_name("drivers/friction", tests, NULL, NULL);
 }
