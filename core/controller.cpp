@@ -4,7 +4,7 @@
 // speedl, stopj, stopl, direct, servol, servoc, direct torque, freedrive, force mode, pause)
 // and when its id is done, the speed slider and pause, the command checks and protective stops,
 // and the set-point interpolation the physics steps follow. The rest of the motion layer sits
-// beside it, one job a file: the motion generators (controller_motion.cpp), kinematics and IK
+// beside it, one job a file: the motions (motion.hpp, motion_*.cpp), kinematics and IK
 // (controller_kinematics.cpp), the model feed-forward (controller_feedforward.cpp) and the motor
 // thermal model (controller_thermal.cpp); controller_internal.hpp is what they share.
 // Everything runs on the physics thread: fixed-size Eigen on the stack, no allocation, no
@@ -38,14 +38,14 @@
 //   and hold. Torques above torque_max are a protective stop.
 // - FREEDRIVE: τ = g(q) of the controller's gravity; held feature-frame axes (q[i] = 0) get a
 //   Cartesian spring-damper toward the pose freedrive began at (tick_freedrive in
-//   controller_motion.cpp).
+//   motion_freedrive.cpp).
 // - SERVOL: IK of the pose once per command (from the set-point), then servoj's filter. SERVOC:
 //   the tool twist ramps at a toward min(v, √(2 a d)) along the line to the goal; r is treated
 //   as 0 (no blending); its id is done on arrival.
 // - FORCE_MODE: a first-order admittance per compliant task-frame axis on the F/T reading
 //   d->wrench_ext (an ideal sensor), speed-limited; the other axes follow a speedl inside force
 //   mode (or hold) and are checked against their deviation limits (tick_force in
-//   controller_motion.cpp).
+//   motion_force.cpp).
 #include <cmath>
 #include <cstring>
 
