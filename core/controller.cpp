@@ -4,7 +4,7 @@
 // speedl, stopj, stopl, direct, servol, servoc, direct torque, freedrive, force mode, pause)
 // and when its id is done, the speed slider and pause, the command checks and protective stops,
 // and the set-point interpolation the physics steps follow. The rest of the motion layer sits
-// beside it, one job a file: the motion generators (controller_motion.cpp), kinematics and IK
+// beside it, one job a file: the motions (motion.hpp, motion_*.cpp), kinematics and IK
 // (controller_kinematics.cpp), the model feed-forward (controller_feedforward.cpp) and the motor
 // thermal model (controller_thermal.cpp); controller_internal.hpp is what they share.
 // Everything runs on the physics thread: fixed-size Eigen on the stack, no allocation, no
@@ -38,18 +38,19 @@
 //   and hold. Torques above torque_max are a protective stop.
 // - FREEDRIVE: τ = g(q) of the controller's gravity; held feature-frame axes (q[i] = 0) get a
 //   Cartesian spring-damper toward the pose freedrive began at (tick_freedrive in
-//   controller_motion.cpp).
+//   motion_freedrive.cpp).
 // - SERVOL: IK of the pose once per command (from the set-point), then servoj's filter. SERVOC:
 //   the tool twist ramps at a toward min(v, √(2 a d)) along the line to the goal; r is treated
 //   as 0 (no blending); its id is done on arrival.
 // - FORCE_MODE: a first-order admittance per compliant task-frame axis on the F/T reading
 //   d->wrench_ext (an ideal sensor), speed-limited; the other axes follow a speedl inside force
 //   mode (or hold) and are checked against their deviation limits (tick_force in
-//   controller_motion.cpp).
+//   motion_force.cpp).
 #include <cmath>
 #include <cstring>
 
 #include "controller_internal.hpp"
+#include "motion.hpp"
 #include "step_internal.h"
 #include "urt/controller.h"
 #include "urt/core.h"
@@ -58,22 +59,11 @@ namespace urt::core {
 
 namespace {
 
-constexpr double kHaltDecel = 4.0;      // HALT and servo time-out deceleration [rad/s²]
 constexpr double kSliderRate = 2.0;     // speed_scaling slew rate [1/s]
 constexpr double kPauseRate = 4.0;      // pause_scale slew rate [1/s]: 0.25 s from full speed to rest
-constexpr int kTorqueTimeout = 4;       // periods without a TORQUE before the arm is stopped
 constexpr double kWrenchMaxF = 1000.0;  // SET_WRENCH / FORCE_MODE force bound per axis [N]
 constexpr double kWrenchMaxT = 200.0;   // and torque bound [N m]
 constexpr double kGravityMax = 100.0;   // SET_GRAVITY bound per axis (the loader's) [m/s²]
-
-// plans are stored in c->plan (copied in and out once per tick)
-Plan load_plan(const urt_ctrl_t* c) noexcept {
-  Plan p;
-  std::memcpy(&p, c->plan, sizeof p);
-  return p;
-}
-
-void store_plan(urt_ctrl_t* c, const Plan& p) noexcept { std::memcpy(c->plan, &p, sizeof p); }
 
 }  // namespace
 
@@ -116,7 +106,6 @@ void finish_motion(urt_ctrl_t* c) noexcept {
   c->force_mode = 0;
 }
 
-namespace {
 
 uint32_t speed_faults(const urt_model_t* m, const double* qd) noexcept {
   for (int j = 0; j < URT_NJ; j++) {
@@ -142,30 +131,7 @@ uint32_t torque_faults(const urt_model_t* m, const double* tau) noexcept {
   return 0;
 }
 
-bool is_motion(const urt_ctrl_cmd_t* cmd) noexcept {
-  const int kind = cmd->kind;
-  return (kind >= URT_CTRL_MOVEJ && kind <= URT_CTRL_DIRECT) || kind == URT_CTRL_SERVOL ||
-         kind == URT_CTRL_SERVOC || kind == URT_CTRL_TORQUE ||
-         (kind == URT_CTRL_FREEDRIVE && cmd->index == 1);
-}
-
-// streamed motions stop on PAUSE (planned ones slow down along their path instead)
-bool is_streaming(urt_ctrl_motion_t motion) noexcept {
-  switch (motion) {
-    case URT_MOTION_SERVOJ:
-    case URT_MOTION_SPEEDJ:
-    case URT_MOTION_SPEEDL:
-    case URT_MOTION_DIRECT:
-    case URT_MOTION_SERVOL:
-    case URT_MOTION_SERVOC:
-    case URT_MOTION_TORQUE:
-    case URT_MOTION_FREEDRIVE:
-    case URT_MOTION_FORCE:
-      return true;
-    default:
-      return false;
-  }
-}
+namespace {
 
 bool running(const urt_ctrl_t* c) noexcept {
   return c->robot_mode == URT_ROBOT_MODE_RUNNING && c->safety_mode == URT_SAFETY_MODE_NORMAL;
@@ -199,36 +165,73 @@ void refuse(urt_ctrl_t* c, const urt_ctrl_cmd_t* cmd, uint32_t fault) noexcept {
   mark_done(c, cmd->id);
 }
 
-// the TCP twist (v; ω) of the set-point q1, qd1, base frame
-Vec6 setpoint_twist(const urt_model_t* m, const urt_ctrl_t* c) noexcept {
-  Mat3 R;
-  Vec3 p;
-  Mat6 J;
-  tcp_kinematics(m->arm, c->tcp_offset, vec6(c->q1), R, p, &J);
-  return J * vec6(c->qd1);
-}
-
-double tcp_twist_decel_time(const urt_model_t* m, const urt_ctrl_t* c, double a,
-                            double a_rot) noexcept {
-  Vec6 x = setpoint_twist(m, c);
-  return std::fmax(x.head<3>().norm() / a, x.tail<3>().norm() / a_rot);
-}
-
-double joint_stop_time(const urt_ctrl_t* c, double a) noexcept {
-  double vmax = 0.0;
-  for (int j = 0; j < URT_NJ; j++) {
-    vmax = std::fmax(vmax, std::fabs(c->qd1[j]));
+// a motion command: checked, then started by its type (motion.hpp)
+void apply_motion(const MotionEnv& e, const Motion& type, const urt_ctrl_cmd_t* cmd) noexcept {
+  const urt_model_t* m = e.m;
+  urt_ctrl_t* c = e.c;
+  urt_data_t* d = e.d;
+  const int kind = cmd->kind;
+  if (!running(c) || d->pstop) {
+    refuse(c, cmd, URT_CTRL_FAULT_NOT_RUNNING);
+    return;
   }
-  return vmax / a;
-}
-
-bool moving(const urt_ctrl_t* c) noexcept {
-  for (int j = 0; j < URT_NJ; j++) {
-    if (c->qd1[j] != 0.0) {
-      return true;
+  // arguments first (refused, no stop), then targets (protective stop)
+  if (type.bad_argument(*cmd)) {
+    refuse(c, cmd, URT_CTRL_FAULT_BAD_ARGUMENT);
+    return;
+  }
+  if (uint32_t bad_target = type.bad_target(m, *cmd)) {
+    mark_done(c, cmd->id);
+    protective_stop(c, d, URT_CTRL_FAULT_BAD_TARGET, bad_target);
+    return;
+  }
+  double qg[URT_NJ];
+  if (type.pose_target) {
+    if (urt_ctrl_inverse_kinematics_tcp(m, c->tcp_offset, cmd->pose, c->q1, qg) != URT_OK) {
+      refuse(c, cmd, URT_CTRL_FAULT_IK);
+      return;
     }
   }
-  return false;
+
+  // inside force mode a speedl (or a stop) sets the motion of the non-compliant axes; any
+  // other motion ends force mode and runs as usual
+  if (c->force_mode && c->motion == URT_MOTION_FORCE) {
+    if (kind == URT_CTRL_SPEEDL || kind == URT_CTRL_STOPL || kind == URT_CTRL_STOPJ) {
+      force_take_speed(e, *cmd);
+      return;
+    }
+    c->force_mode = 0;
+  }
+
+  // the running motion may take the new one over inside its blend radius
+  const Motion& now = motion_of(c->motion);
+  if (now.blend && now.blend(e, *cmd)) {
+    return;
+  }
+
+  // accepted: the previous motion is over (aborted or superseded); a stream (same id, same
+  // kind) continues
+  c->fault = 0;
+  const int prev_kind = c->active.kind;
+  const bool same_stream =
+      type.stream && cmd->id == c->motion_id && kind == prev_kind && c->motion == type.id;
+  uint64_t prev_id = c->motion_id;
+  if (c->has_pending) {
+    mark_done(c, c->pending.id);
+    c->has_pending = 0;
+  }
+  if (!same_stream) {
+    mark_done(c, prev_id);
+  }
+  std::memset(c->tau_ff, 0, sizeof c->tau_ff);
+  if (!type.torque_controlled) {
+    c->torque_mask = 0;  // position control from where the arm is (q1, q̇1 follow it)
+  }
+  const urt_ctrl_motion_t prev_motion = c->motion;
+  c->active = *cmd;
+  c->motion_id = cmd->id;
+  c->seg_time = 0.0;
+  type.start(e, *cmd, MotionStart{prev_motion, type.pose_target ? qg : nullptr});
 }
 
 }  // namespace
@@ -237,6 +240,7 @@ bool moving(const urt_ctrl_t* c) noexcept {
 using namespace urt::core;
 
 extern "C" {
+
 
 int urt_ctrl_init(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, double period,
                   int powered) {
@@ -274,220 +278,10 @@ int urt_ctrl_init(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, doub
 
 void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
                     const urt_ctrl_cmd_t* cmd) {
-  Plan p = load_plan(c);
   const int kind = cmd->kind;
-
-  if (is_motion(cmd)) {
-    if (!running(c) || d->pstop) {
-      refuse(c, cmd, URT_CTRL_FAULT_NOT_RUNNING);
-      return;
-    }
-    // arguments first (refused, no stop), then targets (protective stop)
-    bool bad_arg = false;
-    uint32_t bad_target = 0;
-    switch (kind) {
-      case URT_CTRL_MOVEJ:
-        bad_arg = !(cmd->a > 0.0) || !(cmd->v > 0.0) || !std::isfinite(cmd->a) ||
-                  !std::isfinite(cmd->v) || !std::isfinite(cmd->t) || cmd->t < 0.0;
-        bad_target = target_faults(m, cmd->q);
-        break;
-      case URT_CTRL_MOVEL:
-        bad_arg = !(cmd->a > 0.0) || !(cmd->v > 0.0) || !std::isfinite(cmd->a) ||
-                  !std::isfinite(cmd->v) || !std::isfinite(cmd->t) || cmd->t < 0.0;
-        bad_target = all_finite(cmd->pose, 6) ? 0 : URT_PSTOP_NONFINITE_CMD;
-        break;
-      case URT_CTRL_SERVOJ:
-        bad_arg = !(cmd->lookahead_time >= 0.03 && cmd->lookahead_time <= 0.2) ||
-                  !(cmd->gain >= 100.0 && cmd->gain <= 2000.0) || !std::isfinite(cmd->t) ||
-                  cmd->t < 0.0;
-        bad_target = target_faults(m, cmd->q);
-        break;
-      case URT_CTRL_SPEEDJ:
-        bad_arg = !(cmd->a > 0.0) || !std::isfinite(cmd->a) || !std::isfinite(cmd->t);
-        bad_target = speed_faults(m, cmd->q);
-        break;
-      case URT_CTRL_SPEEDL:
-        bad_arg = !(cmd->a > 0.0) || !std::isfinite(cmd->a) || !std::isfinite(cmd->a_rot) ||
-                  !std::isfinite(cmd->t);
-        bad_target = all_finite(cmd->pose, 6) ? 0 : URT_PSTOP_NONFINITE_CMD;
-        break;
-      case URT_CTRL_STOPJ:
-      case URT_CTRL_STOPL:
-        bad_arg = !(cmd->a > 0.0) || !std::isfinite(cmd->a) || !std::isfinite(cmd->a_rot);
-        break;
-      case URT_CTRL_SERVOL:
-        bad_arg = !(cmd->lookahead_time >= 0.03 && cmd->lookahead_time <= 0.2) ||
-                  !(cmd->gain >= 100.0 && cmd->gain <= 2000.0) || !std::isfinite(cmd->t) ||
-                  cmd->t < 0.0;
-        bad_target = all_finite(cmd->pose, 6) ? 0 : URT_PSTOP_NONFINITE_CMD;
-        break;
-      case URT_CTRL_SERVOC:
-        bad_arg = !(cmd->a > 0.0) || !(cmd->v > 0.0) || !std::isfinite(cmd->a) ||
-                  !std::isfinite(cmd->v) || !std::isfinite(cmd->r);
-        bad_target = all_finite(cmd->pose, 6) ? 0 : URT_PSTOP_NONFINITE_CMD;
-        break;
-      case URT_CTRL_TORQUE:
-        bad_target = torque_faults(m, cmd->tau);
-        break;
-      case URT_CTRL_FREEDRIVE:
-        for (int j = 0; j < URT_NJ; j++) {
-          bad_arg = bad_arg || !(cmd->q[j] == 0.0 || cmd->q[j] == 1.0);
-        }
-        bad_arg = bad_arg || !all_finite(cmd->pose, 6);
-        break;
-      case URT_CTRL_DIRECT:
-        bad_target = target_faults(m, cmd->q);
-        if (!bad_target) {
-          bad_target = speed_faults(m, cmd->qd);
-        }
-        if (!bad_target) {
-          bad_target = torque_faults(m, cmd->tau);
-        }
-        break;
-      default:
-        break;
-    }
-    if (bad_arg) {
-      refuse(c, cmd, URT_CTRL_FAULT_BAD_ARGUMENT);
-      return;
-    }
-    if (bad_target) {
-      mark_done(c, cmd->id);
-      protective_stop(c, d, URT_CTRL_FAULT_BAD_TARGET, bad_target);
-      return;
-    }
-    double qg[URT_NJ];
-    if (kind == URT_CTRL_MOVEL || kind == URT_CTRL_SERVOL || kind == URT_CTRL_SERVOC) {
-      if (urt_ctrl_inverse_kinematics_tcp(m, c->tcp_offset, cmd->pose, c->q1, qg) != URT_OK) {
-        refuse(c, cmd, URT_CTRL_FAULT_IK);
-        return;
-      }
-    }
-
-    // inside force mode a speedl (or a stop) sets the motion of the non-compliant axes; any
-    // other motion ends force mode and runs as usual
-    if (c->force_mode && c->motion == URT_MOTION_FORCE) {
-      if (kind == URT_CTRL_SPEEDL || kind == URT_CTRL_STOPL || kind == URT_CTRL_STOPJ) {
-        c->fault = 0;
-        mark_done(c, c->motion_id);
-        c->motion_id = cmd->id;
-        for (int i = 0; i < 6; i++) {
-          p.force.xd_goal[i] = kind == URT_CTRL_SPEEDL ? cmd->pose[i] : 0.0;
-        }
-        mark_done(c, cmd->id);  // returns at once: the goal holds until replaced
-        store_plan(c, p);
-        return;
-      }
-      c->force_mode = 0;
-    }
-
-    // accepted: the previous motion is over (aborted or superseded); a stream (same id, same
-    // kind) continues
-    c->fault = 0;
-    const int prev_kind = c->active.kind;
-    const bool same_stream = cmd->id == c->motion_id && kind == prev_kind &&
-                             ((kind == URT_CTRL_SERVOJ && c->motion == URT_MOTION_SERVOJ) ||
-                              (kind == URT_CTRL_SERVOL && c->motion == URT_MOTION_SERVOL) ||
-                              (kind == URT_CTRL_SERVOC && c->motion == URT_MOTION_SERVOC) ||
-                              (kind == URT_CTRL_TORQUE && c->motion == URT_MOTION_TORQUE));
-    uint64_t prev_id = c->motion_id;
-    if (c->has_pending) {
-      mark_done(c, c->pending.id);
-      c->has_pending = 0;
-    }
-    if (!same_stream) {
-      mark_done(c, prev_id);
-    }
-    std::memset(c->tau_ff, 0, sizeof c->tau_ff);
-    if (kind != URT_CTRL_TORQUE && kind != URT_CTRL_FREEDRIVE) {
-      c->torque_mask = 0;  // position control from where the arm is (q1, q̇1 follow it)
-    }
-    const urt_ctrl_motion_t prev_motion = c->motion;
-    c->active = *cmd;
-    c->motion_id = cmd->id;
-    c->seg_time = 0.0;
-
-    switch (kind) {
-      case URT_CTRL_MOVEJ:
-      case URT_CTRL_MOVEL:
-        if (moving(c)) {
-          c->pending = *cmd;
-          c->has_pending = 1;
-          double t_stop = kind == URT_CTRL_MOVEJ
-                              ? joint_stop_time(c, cmd->a)
-                              : tcp_twist_decel_time(m, c, cmd->a, cmd->a);
-          start_stop(c, p, t_stop);
-        } else if (kind == URT_CTRL_MOVEJ) {
-          start_movej(m, c, p, cmd);
-        } else {
-          start_movel(m, c, p, cmd);
-        }
-        break;
-      case URT_CTRL_SERVOJ:
-        start_servoj(c, p, cmd->q, URT_MOTION_SERVOJ);
-        break;
-      case URT_CTRL_SPEEDJ: {
-        double dmax = 0.0;
-        for (int j = 0; j < URT_NJ; j++) {
-          p.speedj.qd_goal[j] = cmd->q[j];
-          dmax = std::fmax(dmax, std::fabs(cmd->q[j] - c->qd1[j]));
-        }
-        double tr = dmax / cmd->a;
-        for (int j = 0; j < URT_NJ; j++) {
-          p.speedj.a[j] = tr > 0.0 ? std::fabs(cmd->q[j] - c->qd1[j]) / tr : 0.0;
-        }
-        c->motion = URT_MOTION_SPEEDJ;
-        break;
-      }
-      case URT_CTRL_SPEEDL:
-        put6(setpoint_twist(m, c), p.speedl.xd);
-        std::memcpy(p.speedl.xd_goal, cmd->pose, sizeof p.speedl.xd_goal);
-        c->motion = URT_MOTION_SPEEDL;
-        break;
-      case URT_CTRL_STOPJ:
-        start_stop(c, p, joint_stop_time(c, cmd->a));
-        break;
-      case URT_CTRL_STOPL:
-        start_stop(c, p,
-                   tcp_twist_decel_time(m, c, cmd->a, cmd->a_rot > 0.0 ? cmd->a_rot : cmd->a));
-        break;
-      case URT_CTRL_DIRECT:
-        std::memcpy(c->tau_ff, cmd->tau, sizeof c->tau_ff);
-        c->motion = URT_MOTION_DIRECT;
-        break;
-      case URT_CTRL_SERVOL:
-        // servoj on the joint target of the pose (IK from the set-point, once per command)
-        start_servoj(c, p, qg, URT_MOTION_SERVOL);
-        break;
-      case URT_CTRL_SERVOC:
-        if (prev_motion != URT_MOTION_SERVOC) {
-          put6(setpoint_twist(m, c), p.servoc.xd);
-        }
-        std::memcpy(p.servoc.target, cmd->pose, sizeof p.servoc.target);
-        c->motion = URT_MOTION_SERVOC;
-        break;
-      case URT_CTRL_TORQUE:
-        std::memcpy(p.torque.tau, cmd->tau, sizeof p.torque.tau);
-        p.torque.friction = cmd->index == 1 ? 1.0 : 0.0;
-        p.torque.since = 0.0;
-        c->motion = URT_MOTION_TORQUE;
-        break;
-      case URT_CTRL_FREEDRIVE:
-        if (prev_motion != URT_MOTION_FREEDRIVE) {
-          double pose[6];
-          urt_ctrl_forward_kinematics_tcp(m, c->tcp_offset, c->q1, pose);
-          std::memcpy(p.freedrive.p_hold, pose, sizeof p.freedrive.p_hold);
-          std::memcpy(p.freedrive.r_hold, pose + 3, sizeof p.freedrive.r_hold);
-        }
-        std::memcpy(p.freedrive.free, cmd->q, sizeof p.freedrive.free);
-        std::memcpy(p.freedrive.feature, cmd->pose, sizeof p.freedrive.feature);
-        mark_done(c, cmd->id);  // teach mode returns at once; it lasts until ended
-        c->motion = URT_MOTION_FREEDRIVE;
-        break;
-      default:
-        break;
-    }
-    store_plan(c, p);
+  const MotionEnv e{m, c, d, 0.0, 0.0};
+  if (const Motion* type = motion_for_command(*cmd)) {
+    apply_motion(e, *type, cmd);
     return;
   }
 
@@ -560,20 +354,14 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         // the program ended while paused: the held motion is over
         c->paused = 0;
         if (c->motion != URT_MOTION_IDLE || c->has_pending) {
-          finish_motion(c);
-          start_stop(c, p, joint_stop_time(c, kHaltDecel));
-          store_plan(c, p);
+          stop_to_rest(e, StopCause::kHalt);
         }
       }
       break;
     case URT_CTRL_PAUSE:
       if (!c->paused) {
         c->paused = 1;
-        if (is_streaming(c->motion)) {
-          finish_motion(c);
-          start_stop(c, p, joint_stop_time(c, kHaltDecel));
-          store_plan(c, p);
-        }
+        motion_of(c->motion).stop(e, StopCause::kPause);
       }
       break;
     case URT_CTRL_RESUME:
@@ -613,9 +401,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
     }
     case URT_CTRL_FREEDRIVE:  // index 0 (index 1 is a motion): end, decelerate, hold
       if (c->motion == URT_MOTION_FREEDRIVE) {
-        finish_motion(c);
-        start_stop(c, p, joint_stop_time(c, kHaltDecel));
-        store_plan(c, p);
+        stop_to_rest(e, StopCause::kHalt);
       }
       break;
     case URT_CTRL_FORCE_MODE: {
@@ -632,20 +418,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       } else {
         c->force = *cmd;
         if (!c->force_mode || c->motion != URT_MOTION_FORCE) {
-          // force mode takes the motion generator over from the current set-point and twist;
-          // a running speedl goes on inside it, any other motion is over
-          Vec6 xd = setpoint_twist(m, c);
-          Vec6 goal = Vec6::Zero();
-          if (c->motion == URT_MOTION_SPEEDL) {
-            goal = vec6(p.speedl.xd_goal);
-          }
-          finish_motion(c);
-          put6(xd, p.force.xd);
-          put6(goal, p.force.xd_goal);
-          c->force_mode = 1;
-          c->motion = URT_MOTION_FORCE;
-          c->seg_time = 0.0;
-          store_plan(c, p);
+          force_begin(e);
         }
       }
       break;
@@ -656,8 +429,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         c->force_mode = 0;
         if (was_force) {
           finish_motion(c);
-          start_stop(c, p, tcp_twist_decel_time(m, c, kForceAcc, kForceAccRot));
-          store_plan(c, p);
+          start_stop(c, tcp_twist_decel_time(m, c, kForceAcc, kForceAccRot));
         }
       }
       break;
@@ -670,15 +442,14 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       break;
     case URT_CTRL_HALT:
       if (c->motion != URT_MOTION_IDLE || moving(c)) {
-        finish_motion(c);
-        start_stop(c, p, joint_stop_time(c, kHaltDecel));
-        store_plan(c, p);
+        motion_of(c->motion).stop(e, StopCause::kHalt);
       }
       break;
     default:
       break;
   }
 }
+
 
 void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
   c->tick++;
@@ -720,110 +491,14 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
     return;
   }
 
-  Plan p = load_plan(c);
   c->seg_time += c->period;
-  switch (c->motion) {
-    case URT_MOTION_IDLE:
-      std::memset(c->qd1, 0, sizeof c->qd1);
-      std::memset(c->qdd1, 0, sizeof c->qdd1);
-      break;
-    case URT_MOTION_MOVEJ:
-      c->traj_time += scale * c->period;
-      tick_movej(c, p, scale, dscale_all);
-      break;
-    case URT_MOTION_MOVEL:
-      c->traj_time += scale * c->period;
-      if (!tick_movel(m, c, p, scale)) {
-        protective_stop(c, d, URT_CTRL_FAULT_IK, URT_PSTOP_POS_LIMIT);
-        c->torque_mask_last = 0;
-        return;
-      }
-      break;
-    case URT_MOTION_SERVOJ:
-    case URT_MOTION_SERVOL:
-      tick_servoj(m, c, p);
-      if (p.servoj.since > std::fmax(c->active.t, c->period) + c->period) {
-        // no new servoj in time: decelerate to rest
-        mark_done(c, c->motion_id);
-        start_stop(c, p, joint_stop_time(c, kHaltDecel));
-      }
-      break;
-    case URT_MOTION_SPEEDJ:
-      tick_speedj(c, p);
-      if (c->active.t > 0.0 && c->seg_time >= c->active.t - 1e-12) {
-        mark_done(c, c->motion_id);
-        start_stop(c, p, joint_stop_time(c, c->active.a));
-      }
-      break;
-    case URT_MOTION_SPEEDL:
-      tick_speedl(m, c, p);
-      if (c->active.t > 0.0 && c->seg_time >= c->active.t - 1e-12) {
-        mark_done(c, c->motion_id);
-        double a_rot = c->active.a_rot > 0.0 ? c->active.a_rot : c->active.a;
-        start_stop(c, p, tcp_twist_decel_time(m, c, c->active.a, a_rot));
-      }
-      break;
-    case URT_MOTION_STOP:
-      tick_stop(c, p);
-      if (!moving(c)) {
-        if (c->has_pending) {
-          urt_ctrl_cmd_t next = c->pending;
-          c->has_pending = 0;
-          if (next.kind == URT_CTRL_MOVEJ) {
-            start_movej(m, c, p, &next);
-          } else {
-            start_movel(m, c, p, &next);
-          }
-        } else {
-          finish_motion(c);
-        }
-      }
-      break;
-    case URT_MOTION_DIRECT:
-      std::memcpy(c->q1, c->active.q, sizeof c->q1);
-      std::memcpy(c->qd1, c->active.qd, sizeof c->qd1);
-      for (int j = 0; j < URT_NJ; j++) {
-        c->qdd1[j] = (c->qd1[j] - c->qd0[j]) / c->period;
-      }
-      mark_done(c, c->motion_id);
-      break;
-    case URT_MOTION_SERVOC:
-      if (tick_servoc(m, c, p)) {
-        finish_motion(c);
-      }
-      break;
-    case URT_MOTION_TORQUE: {
-      // torque control of every drive: the set-point follows the arm, the drives make the
-      // commanded torque (plus the friction model at the actual speed with index 1)
-      TorquePlan& tp = p.torque;
-      follow_actual(m, c, d, kAllJoints);
-      tp.since += c->period;
-      if (tp.since > (kTorqueTimeout + 0.5) * c->period) {
-        // the stream stopped: back to position control, decelerate to rest and hold
-        finish_motion(c);
-        start_stop(c, p, joint_stop_time(c, kHaltDecel));
-        break;
-      }
-      c->torque_mask = kAllJoints;
-      for (int j = 0; j < URT_NJ; j++) {
-        double f = tp.friction != 0.0 ? friction_ff(m, j, d->x[j][URT_X_QD]) : 0.0;
-        c->tau_ff[j] = clamp_torque(m, j, tp.tau[j] + f);
-      }
-      mark_done(c, c->motion_id);
-      break;
-    }
-    case URT_MOTION_FREEDRIVE:
-      tick_freedrive(m, c, d, p);
-      break;
-    case URT_MOTION_FORCE:
-      if (!tick_force(m, c, d, p)) {
-        protective_stop(c, d, URT_CTRL_FAULT_BAD_TARGET, URT_PSTOP_POS_LIMIT);
-        c->torque_mask_last = 0;
-        return;
-      }
-      break;
+  const MotionEnv e{m, c, d, scale, dscale_all};
+  if (uint32_t fault = motion_of(c->motion).tick(e)) {
+    // the motion cannot go on (a line out of the workspace, a force-mode deviation)
+    protective_stop(c, d, fault, URT_PSTOP_POS_LIMIT);
+    c->torque_mask_last = 0;
+    return;
   }
-  store_plan(c, p);
 
   // a set-point the joints cannot follow is a protective stop, as on a real robot (for
   // torque-controlled joints: the arm left the joint limits or runs too fast)

@@ -20,79 +20,6 @@ constexpr double kForceAcc = 2.5;       // force-mode tool acceleration bound [m
 constexpr double kForceAccRot = 5.0;    // and angular [rad/s²]
 constexpr uint32_t kAllJoints = (1u << URT_NJ) - 1u;  // a torque_mask with every joint
 
-// ---- plans, stored in c->plan (copied in and out once per tick) ----
-
-// Trapezoidal speed profile over a distance D: accelerate at ap for ta, cruise at vp, brake.
-struct Trap {
-  double D, T, ta, vp, ap;
-};
-
-struct MovejPlan {
-  Trap tr;
-  double q_start[URT_NJ], dq[URT_NJ];
-};
-
-struct MovelPlan {
-  Trap tr;
-  double p_start[3], dp[3];      // line: p = p_start + dp · s/D
-  double r_start[3];             // start orientation (rotation vector)
-  double axis[3], theta;         // R(s) = R_start · Rot(axis, θ s/D), axis in the start frame
-};
-
-struct StopPlan {
-  double a[URT_NJ];              // per-joint deceleration, all joints reach 0 together
-};
-
-struct SpeedjPlan {
-  double qd_goal[URT_NJ], a[URT_NJ];
-};
-
-struct SpeedlPlan {
-  double xd_goal[6], xd[6];      // goal and current tool twist (v; ω), base frame
-};
-
-struct ServojPlan {
-  double target[URT_NJ];
-  double since;                  // time since the last servoj [s]
-};
-
-struct TorquePlan {
-  double tau[URT_NJ];            // commanded joint torques [N m]
-  double friction;               // 1: add the friction model at the actual speed
-  double since;                  // time since the last TORQUE [s]
-};
-
-struct FreedrivePlan {
-  double free[6];                // feature-frame axes x y z rx ry rz: 1 free, 0 held
-  double feature[6];             // the feature frame (pose in the base frame)
-  double p_hold[3], r_hold[3];   // TCP pose when freedrive began (base frame)
-};
-
-struct ServocPlan {
-  double target[6];              // pose goal
-  double xd[6];                  // current tool twist (v; ω), base frame
-};
-
-struct ForcePlan {
-  double xd[6];                  // current tool twist (v; ω), base frame
-  double xd_goal[6];             // twist of the speedl running inside force mode, base frame
-};
-
-union Plan {
-  MovejPlan movej;
-  MovelPlan movel;
-  StopPlan stop;
-  SpeedjPlan speedj;
-  SpeedlPlan speedl;
-  ServojPlan servoj;
-  TorquePlan torque;
-  FreedrivePlan freedrive;
-  ServocPlan servoc;
-  ForcePlan force;
-  double raw[64];
-};
-static_assert(sizeof(Plan) == sizeof(((urt_ctrl_t*)nullptr)->plan), "plan fits c->plan");
-
 // ---- command checks (controller.cpp) ----
 
 // URT_PSTOP_* bit a joint target deserves (0: fine): non-finite, or outside the joint limits.
@@ -107,35 +34,11 @@ void mark_done(urt_ctrl_t* c, uint64_t id) noexcept;
 // position control, out of force mode, no external feed-forward.
 void finish_motion(urt_ctrl_t* c) noexcept;
 
-// ---- motion generators (controller_motion.cpp) ----
-// start_*: set c->motion and fill the plan p; tick_*: one period, from the set-point at the
-// period's start (c->q0, qd0, qdd0) to its end (c->q1, qd1, qdd1).
-
-void start_servoj(urt_ctrl_t* c, Plan& p, const double* q, urt_ctrl_motion_t motion) noexcept;
-void start_stop(urt_ctrl_t* c, Plan& p, double t_stop) noexcept;
-bool start_movej(const urt_model_t* m, urt_ctrl_t* c, Plan& p, const urt_ctrl_cmd_t* cmd) noexcept;
-bool start_movel(const urt_model_t* m, urt_ctrl_t* c, Plan& p, const urt_ctrl_cmd_t* cmd) noexcept;
-
-// movej's time is the path time c->traj_time, which the slider and the pause scale (scale, and
-// its rate dscale). tick_movel returns false when the line left the workspace (no IK).
-void tick_movej(urt_ctrl_t* c, Plan& p, double scale, double dscale) noexcept;
-bool tick_movel(const urt_model_t* m, urt_ctrl_t* c, Plan& p, double scale) noexcept;
-
-void tick_stop(urt_ctrl_t* c, const Plan& p) noexcept;
-void tick_speedj(urt_ctrl_t* c, const Plan& p) noexcept;
-void tick_speedl(const urt_model_t* m, urt_ctrl_t* c, Plan& p) noexcept;
-void tick_servoj(const urt_model_t* m, urt_ctrl_t* c, Plan& p) noexcept;
-
-// Returns true when the goal is reached (the set-point then sits on it at rest).
-bool tick_servoc(const urt_model_t* m, urt_ctrl_t* c, Plan& p) noexcept;
-
-// Returns false when a non-compliant axis deviates from the set-point by more than its limit.
-bool tick_force(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, Plan& p) noexcept;
-
-void tick_freedrive(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, Plan& p) noexcept;
+// ---- shared by the motions (core/motion_*.cpp, interface in motion.hpp) ----
 
 // Torque-controlled joints (mask): the set-point follows the arm, so that the command checks,
 // the snapshot's targets and the return to position control see where the arm really is.
+// (motion_torque.cpp)
 void follow_actual(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d,
                    uint32_t mask) noexcept;
 

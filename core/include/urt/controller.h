@@ -16,6 +16,7 @@
 
 #include <stdint.h>
 
+#include "urt/controller_motion_state.h"
 #include "urt/data.h"
 #include "urt/model.h"
 
@@ -179,7 +180,7 @@ typedef struct urt_ctrl {
   uint64_t motion_done_id;    /* highest id finished (or aborted)                  */
   double seg_time;            /* time into the current motion [s]                  */
   urt_ctrl_cmd_t active;      /* the command being executed                        */
-  double plan[64];            /* motion-specific plan (trapezoid phases, line, …)  */
+  urt_ctrl_motion_state_t motion_state; /* the running motion's own state (its member)  */
 
   /* set-points: at the start (0) and end (1) of the current period; the physics steps
    * interpolate between them */

@@ -1,0 +1,842 @@
+/* SPDX-License-Identifier: Apache-2.0
+ * tests/core/test_controller_hash.c — the controller's behaviour, bit for bit. Every scenario
+ * drives the controller (core/controller*.cpp, core/motion_*.cpp) through existing motions —
+ * every command kind, refusals, stops, speed-slider changes, pauses, protective stops — the way
+ * the hard loop does (apply, tick, n_sub × setpoint + step), and after every controller period
+ * folds the whole controller and physics state into one FNV-1a 64 hash. The final hash of each
+ * scenario is compared with the one recorded in kRecorded below.
+ *
+ * The motion state (urt_ctrl_t.motion_state: plans, filters) is left out: its layout is the
+ * implementation's business; everything it decides shows in the set-points (q1, qd1, qdd1,
+ * tau_ff, ...) and in the physics the next period.
+ *
+ * Floating point bits depend on the compiler and its flags (Release: -O3 -march=x86-64-v3 with
+ * FMA contraction), so each build configuration has its own row (config_key()). A configuration
+ * with no recorded row fails and prints its hashes. Under AddressSanitizer (clang -O0, about
+ * 50 s per simulated second here: the scenarios would take an hour) only a short scenario runs,
+ * twice, and must give the same hash: the sanitizer's job is memory errors, not these bits.
+ *
+ * Re-recording, when a motion's behaviour changes on purpose: run the test with
+ * URT_RECORD_HASHES=1 (`URT_RECORD_HASHES=1 build/tests/core/test_core_controller_hash`); it
+ * prints the row to paste into kRecorded (one row per configuration you run the tests in).
+ * Say in the commit message which scenarios changed and why. */
+#include <math.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "controller_harness.h"
+#include "test_model.h"
+#include "test_support.h"
+#include "urt/controller.h"
+#include "urt/core.h"
+
+/* ---- the configuration and the recorded hashes ---- */
+
+#if defined(__clang__)
+#define URT_CC "clang"
+#else
+#define URT_CC "gcc"
+#endif
+#if defined(__OPTIMIZE__)
+#define URT_OPT "-O"
+#else
+#define URT_OPT "-O0"
+#endif
+#if defined(__FMA__)
+#define URT_FMA "+fma"
+#else
+#define URT_FMA ""
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define URT_TEST_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define URT_TEST_ASAN 1
+#endif
+#endif
+#ifdef URT_TEST_ASAN
+#define URT_SAN "+asan"
+#else
+#define URT_SAN ""
+#endif
+
+static const char *config_key(void) { return URT_CC URT_OPT URT_FMA URT_SAN; }
+
+enum {
+  SC_MOVEJ,
+  SC_MOVEL,
+  SC_SERVO,
+  SC_SPEED,
+  SC_DIRECT,
+  SC_SERVOC,
+  SC_TORQUE,
+  SC_FREEDRIVE,
+  SC_FORCE,
+  SC_STATES,
+  SC_PAUSE,
+  SC_CB3,
+  SC_COUNT
+};
+
+static const char *const kScenarioName[SC_COUNT] = {
+    "movej", "movel", "servo", "speed", "direct", "servoc", "torque", "freedrive",
+    "force", "states", "pause", "cb3"};
+
+typedef struct recorded {
+  const char *config;
+  uint64_t hash[SC_COUNT];
+} recorded_t;
+
+/* recorded from the code before the motions became objects (see the commit message) */
+static const recorded_t kRecorded[] = {
+    {"gcc-O+fma",
+     {0x94deb752347bf21dull, 0x5c06e1308ec6f53cull, 0xbbf6db9f224f0374ull,
+      0xebe99792b08bb646ull, 0x95e8b749bc06d2feull, 0x3cfa83493353e3abull,
+      0xa30101473f3a3473ull, 0x62a5626a41412d16ull, 0xd754d89cefd58376ull,
+      0x872157e5f854271eull, 0xedd6bcb46cd01ceeull, 0xdd2067a680854e70ull}},
+};
+
+/* ---- hashing ---- */
+
+static uint64_t fnv(uint64_t h, const void *p, size_t n) {
+  const unsigned char *b = p;
+  for (size_t i = 0; i < n; i++) {
+    h ^= b[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+static uint64_t g_hash;
+static uint32_t g_motions, g_faults, g_pstops;  /* what a scenario went through (coverage) */
+
+/* the controller without its motion state (everything before it and after it), and the data */
+static void fold(const rig_t *r) {
+  const unsigned char *c = (const unsigned char *)r->c;
+  const size_t head = offsetof(urt_ctrl_t, active) + sizeof r->c->active;
+  const size_t tail = offsetof(urt_ctrl_t, q0);
+  g_hash = fnv(g_hash, c, head);
+  g_hash = fnv(g_hash, c + tail, sizeof *r->c - tail);
+  // the command's tail padding is whatever the caller's stack held (urt_command_set copies it)
+  urt_data_t d = *r->d;
+  const size_t pad = offsetof(urt_command_t, torque_mask) + sizeof d.cmd.torque_mask;
+  memset((unsigned char *)&d.cmd + pad, 0, sizeof d.cmd - pad);
+  g_hash = fnv(g_hash, &d, sizeof d);
+  g_motions |= 1u << r->c->motion;
+  g_faults |= r->c->fault;
+  g_pstops |= r->d->pstop;
+}
+
+static void period(rig_t *r, const urt_ctrl_cmd_t *cmd) {
+  rig_period(r, cmd);
+  fold(r);
+}
+
+static void run(rig_t *r, double t) {
+  int n = (int)lround(t / r->c->period);
+  for (int i = 0; i < n; i++) {
+    period(r, NULL);
+  }
+}
+
+/* periods until the motion id is done (at most t_max), then t_after more */
+static void run_until_done(rig_t *r, uint64_t id, double t_max, double t_after) {
+  int n = (int)lround(t_max / r->c->period);
+  for (int i = 0; i < n && r->c->motion_done_id < id; i++) {
+    period(r, NULL);
+  }
+  run(r, t_after);
+}
+
+static urt_ctrl_cmd_t cmd_of(rig_t *r, int kind) {
+  urt_ctrl_cmd_t c;
+  memset(&c, 0, sizeof c);
+  c.kind = kind;
+  c.id = r->next_id++;
+  return c;
+}
+
+static void send(rig_t *r, int kind) {
+  urt_ctrl_cmd_t c = cmd_of(r, kind);
+  period(r, &c);
+}
+
+static urt_ctrl_cmd_t movej(rig_t *r, const double *q, double a, double v, double t) {
+  urt_ctrl_cmd_t c = cmd_of(r, URT_CTRL_MOVEJ);
+  memcpy(c.q, q, sizeof c.q);
+  c.a = a;
+  c.v = v;
+  c.t = t;
+  return c;
+}
+
+static urt_ctrl_cmd_t movel(rig_t *r, const double *pose, double a, double v, double t) {
+  urt_ctrl_cmd_t c = cmd_of(r, URT_CTRL_MOVEL);
+  memcpy(c.pose, pose, sizeof c.pose);
+  c.a = a;
+  c.v = v;
+  c.t = t;
+  return c;
+}
+
+static void slider(rig_t *r, double v) {
+  urt_ctrl_cmd_t c = cmd_of(r, URT_CTRL_SET_SPEED_SLIDER);
+  c.value = v;
+  period(r, &c);
+}
+
+static const double kWork[URT_NJ] = {0.0, -1.9, 1.9, -1.57, -1.57, 0.0};
+
+static void go_work(rig_t *r) {
+  urt_ctrl_cmd_t c = movej(r, kWork, 3.0, 2.0, 0.0);
+  period(r, &c);
+  run_until_done(r, c.id, 6.0, 0.2);
+}
+
+static void pose_now(const rig_t *r, double pose[6]) {
+  urt_ctrl_forward_kinematics_tcp(r->m, r->c->tcp_offset, r->c->q1, pose);
+}
+
+/* ---- scenarios ---- */
+
+static void sc_movej(rig_t *r) {
+  double q[URT_NJ];
+  memcpy(q, kWork, sizeof q);
+  go_work(r);
+  q[0] += 0.4;
+  q[2] -= 0.2;
+  urt_ctrl_cmd_t a = movej(r, q, 1.4, 1.05, 0.0);
+  period(r, &a);
+  run(r, 0.3);
+  slider(r, 0.3);  // the slider slows the path
+  run(r, 0.4);
+  slider(r, 1.0);
+  run_until_done(r, a.id, 5.0, 0.1);
+  q[1] += 0.3;
+  urt_ctrl_cmd_t b = movej(r, q, 1.4, 1.05, 2.0);  // t overrides a and v
+  period(r, &b);
+  run(r, 0.5);
+  q[3] -= 0.5;
+  urt_ctrl_cmd_t c = movej(r, q, 2.0, 1.0, 0.0);  // arrives moving: stop, then start
+  period(r, &c);
+  run_until_done(r, c.id, 5.0, 0.1);
+  q[4] += 0.1;
+  urt_ctrl_cmd_t fast = movej(r, q, 1.0, 1.0, 0.01);  // t too short for the joints: a, v
+  period(r, &fast);
+  run_until_done(r, fast.id, 3.0, 0.1);
+  urt_ctrl_cmd_t bad = movej(r, q, 0.0, 1.0, 0.0);  // refused: a = 0
+  period(r, &bad);
+  bad = movej(r, q, 1.0, NAN, 0.0);
+  period(r, &bad);
+  run(r, 0.02);
+  q[0] = 100.0;  // outside the joint limits: protective stop
+  urt_ctrl_cmd_t out = movej(r, q, 1.0, 1.0, 0.0);
+  period(r, &out);
+  run(r, 0.1);
+  send(r, URT_CTRL_UNLOCK_PSTOP);
+  run(r, 0.1);
+  urt_ctrl_cmd_t back = movej(r, kWork, 1.4, 1.05, 0.0);
+  period(r, &back);
+  run_until_done(r, back.id, 6.0, 0.1);
+}
+
+static void sc_movel(rig_t *r) {
+  go_work(r);
+  double p[6];
+  pose_now(r, p);
+  p[0] += 0.1;
+  p[2] -= 0.05;
+  urt_ctrl_cmd_t a = movel(r, p, 1.2, 0.25, 0.0);
+  period(r, &a);
+  run(r, 0.2);
+  slider(r, 0.5);
+  run(r, 0.2);
+  slider(r, 1.0);
+  run_until_done(r, a.id, 5.0, 0.1);
+  p[4] += 0.3;  // translation and rotation
+  p[1] += 0.05;
+  urt_ctrl_cmd_t b = movel(r, p, 1.2, 0.25, 0.0);
+  period(r, &b);
+  run_until_done(r, b.id, 5.0, 0.1);
+  p[3] += 0.2;  // rotation alone
+  urt_ctrl_cmd_t c = movel(r, p, 1.0, 0.5, 0.0);
+  period(r, &c);
+  run_until_done(r, c.id, 5.0, 0.1);
+  p[2] += 0.05;
+  urt_ctrl_cmd_t d = movel(r, p, 1.2, 0.25, 1.5);  // with t
+  period(r, &d);
+  run(r, 0.3);
+  double q[URT_NJ];
+  memcpy(q, kWork, sizeof q);
+  q[0] -= 0.2;
+  urt_ctrl_cmd_t e = movej(r, q, 1.4, 1.0, 0.0);  // a movej on a moving line
+  period(r, &e);
+  run(r, 0.2);
+  pose_now(r, p);
+  p[0] -= 0.05;
+  urt_ctrl_cmd_t f = movel(r, p, 1.2, 0.25, 0.0);  // a movel on a moving movej
+  period(r, &f);
+  run_until_done(r, f.id, 5.0, 0.1);
+  double far[6] = {3.0, 0.0, 0.5, 0.0, 3.14, 0.0};  // out of reach: refused (IK)
+  urt_ctrl_cmd_t g = movel(r, far, 1.2, 0.25, 0.0);
+  period(r, &g);
+  urt_ctrl_cmd_t h = movel(r, p, -1.0, 0.25, 0.0);  // bad argument
+  period(r, &h);
+  p[0] += 1.2;  // reachable at the start, not along the line: protective stop on the way
+  urt_ctrl_cmd_t i = movel(r, p, 1.2, 1.0, 0.0);
+  period(r, &i);
+  run(r, 2.0);
+  send(r, URT_CTRL_UNLOCK_PSTOP);
+  run(r, 0.1);
+}
+
+static void sc_servo(rig_t *r) {
+  go_work(r);
+  urt_ctrl_cmd_t s = cmd_of(r, URT_CTRL_SERVOJ);
+  for (int k = 0; k < 400; k++) {
+    memcpy(s.q, kWork, sizeof s.q);
+    s.q[0] += 0.2 * sin(2.0 * M_PI * 0.5 * k * r->c->period);
+    s.q[5] += 0.1 * k * r->c->period;
+    s.t = r->c->period;
+    s.lookahead_time = 0.1;
+    s.gain = 300.0;
+    period(r, &s);
+  }
+  run(r, 0.5);  // the stream stopped: decelerate
+  urt_ctrl_cmd_t b = cmd_of(r, URT_CTRL_SERVOJ);
+  memcpy(b.q, r->c->q1, sizeof b.q);
+  b.lookahead_time = 0.01;  // refused
+  b.gain = 300.0;
+  period(r, &b);
+  b = cmd_of(r, URT_CTRL_SERVOJ);
+  memcpy(b.q, r->c->q1, sizeof b.q);
+  b.q[1] += 0.05;
+  b.lookahead_time = 0.05;
+  b.gain = 1000.0;
+  b.t = 0.2;  // one long call
+  period(r, &b);
+  run(r, 0.5);
+  double p[6];
+  pose_now(r, p);
+  urt_ctrl_cmd_t l = cmd_of(r, URT_CTRL_SERVOL);
+  for (int k = 0; k < 300; k++) {
+    memcpy(l.pose, p, sizeof l.pose);
+    l.pose[2] += 0.03 * sin(2.0 * M_PI * 1.0 * k * r->c->period);
+    l.t = 0.008;
+    l.lookahead_time = 0.08;
+    l.gain = 500.0;
+    period(r, &l);
+  }
+  run(r, 0.5);
+  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_SERVOJ);  // a target outside the limits: pstop
+  memcpy(bad.q, r->c->q1, sizeof bad.q);
+  bad.q[2] = 10.0;
+  bad.lookahead_time = 0.1;
+  bad.gain = 300.0;
+  period(r, &bad);
+  run(r, 0.1);
+  send(r, URT_CTRL_UNLOCK_PSTOP);
+  run(r, 0.1);
+}
+
+static void sc_speed(rig_t *r) {
+  go_work(r);
+  urt_ctrl_cmd_t a = cmd_of(r, URT_CTRL_SPEEDJ);
+  a.q[0] = 0.3;
+  a.q[2] = -0.2;
+  a.a = 1.0;
+  a.t = 0.6;
+  period(r, &a);
+  run(r, 1.0);
+  urt_ctrl_cmd_t b = cmd_of(r, URT_CTRL_SPEEDJ);  // without t, replaced, then stopj
+  b.q[1] = -0.2;
+  b.a = 2.0;
+  period(r, &b);
+  run(r, 0.4);
+  b = cmd_of(r, URT_CTRL_SPEEDJ);
+  b.q[1] = 0.25;
+  b.q[4] = 0.1;
+  b.a = 3.0;
+  period(r, &b);
+  run(r, 0.3);
+  urt_ctrl_cmd_t sj = cmd_of(r, URT_CTRL_STOPJ);
+  sj.a = 2.0;
+  period(r, &sj);
+  run(r, 0.4);
+  urt_ctrl_cmd_t l = cmd_of(r, URT_CTRL_SPEEDL);
+  l.pose[0] = 0.05;
+  l.pose[2] = -0.03;
+  l.a = 0.5;
+  l.t = 0.5;
+  period(r, &l);
+  run(r, 0.8);
+  l = cmd_of(r, URT_CTRL_SPEEDL);
+  l.pose[1] = 0.04;
+  l.pose[5] = 0.2;
+  l.a = 0.6;
+  l.a_rot = 1.5;
+  period(r, &l);
+  run(r, 0.4);
+  urt_ctrl_cmd_t sl = cmd_of(r, URT_CTRL_STOPL);
+  sl.a = 0.8;
+  period(r, &sl);
+  run(r, 0.4);
+  l = cmd_of(r, URT_CTRL_SPEEDL);
+  l.pose[2] = 0.03;
+  l.a = 0.5;
+  period(r, &l);
+  run(r, 0.2);
+  sl = cmd_of(r, URT_CTRL_STOPL);
+  sl.a = 0.8;
+  sl.a_rot = 2.0;
+  period(r, &sl);
+  run(r, 0.3);
+  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_SPEEDJ);  // refused, then too fast: pstop
+  bad.a = -1.0;
+  period(r, &bad);
+  bad = cmd_of(r, URT_CTRL_STOPJ);
+  period(r, &bad);
+  bad = cmd_of(r, URT_CTRL_SPEEDJ);
+  bad.q[0] = 100.0;
+  bad.a = 1.0;
+  period(r, &bad);
+  run(r, 0.1);
+  send(r, URT_CTRL_UNLOCK_PSTOP);
+  run(r, 0.1);
+}
+
+static void sc_direct(rig_t *r) {
+  go_work(r);
+  urt_ctrl_cmd_t d = cmd_of(r, URT_CTRL_DIRECT);
+  double q0[URT_NJ];
+  memcpy(q0, r->c->q1, sizeof q0);
+  for (int k = 0; k < 200; k++) {
+    double t = k * r->c->period;
+    memcpy(d.q, q0, sizeof d.q);
+    d.q[1] += 0.05 * (1.0 - cos(2.0 * M_PI * t));
+    memset(d.qd, 0, sizeof d.qd);
+    d.qd[1] = 0.05 * 2.0 * M_PI * sin(2.0 * M_PI * t);
+    memset(d.tau, 0, sizeof d.tau);
+    d.tau[1] = 0.5;
+    d.id = r->next_id++;
+    period(r, &d);
+  }
+  run(r, 0.1);
+  send(r, URT_CTRL_HALT);
+  run(r, 0.3);
+  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_DIRECT);
+  memcpy(bad.q, q0, sizeof bad.q);
+  bad.qd[0] = 100.0;  // too fast: pstop
+  period(r, &bad);
+  run(r, 0.1);
+  send(r, URT_CTRL_UNLOCK_PSTOP);
+  run(r, 0.1);
+}
+
+static void sc_servoc(rig_t *r) {
+  go_work(r);
+  double p[6];
+  pose_now(r, p);
+  urt_ctrl_cmd_t s = cmd_of(r, URT_CTRL_SERVOC);
+  memcpy(s.pose, p, sizeof s.pose);
+  s.pose[0] += 0.08;
+  s.pose[5] += 0.2;
+  s.a = 1.0;
+  s.v = 0.2;
+  period(r, &s);
+  run(r, 0.3);
+  s.pose[1] += 0.05;  // the same stream, a new goal
+  period(r, &s);
+  run_until_done(r, s.id, 4.0, 0.1);
+  urt_ctrl_cmd_t b = cmd_of(r, URT_CTRL_SERVOC);
+  memcpy(b.pose, p, sizeof b.pose);
+  b.a = 0.0;  // refused
+  b.v = 0.2;
+  period(r, &b);
+  b = cmd_of(r, URT_CTRL_SERVOC);
+  memcpy(b.pose, p, sizeof b.pose);
+  b.a = 1.5;
+  b.v = 0.3;
+  b.r = 0.01;
+  period(r, &b);
+  run(r, 0.2);
+  send(r, URT_CTRL_HALT);
+  run(r, 0.3);
+}
+
+static void sc_torque(rig_t *r) {
+  go_work(r);
+  urt_ctrl_cmd_t t = cmd_of(r, URT_CTRL_TORQUE);
+  for (int k = 0; k < 250; k++) {
+    for (int j = 0; j < URT_NJ; j++) {
+      t.tau[j] = r->c->tau_model1[j] + r->c->tau_bias[j];
+    }
+    t.tau[0] += 2.0 * sin(2.0 * M_PI * 2.0 * k * r->c->period);
+    t.index = k > 120 ? 1 : 0;
+    period(r, &t);
+  }
+  run(r, 0.5);  // the stream stopped: position control, stop, hold
+  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_TORQUE);
+  bad.tau[1] = 1e6;  // above torque_max: pstop
+  period(r, &bad);
+  run(r, 0.1);
+  send(r, URT_CTRL_UNLOCK_PSTOP);
+  run(r, 0.1);
+}
+
+static void sc_freedrive(rig_t *r) {
+  go_work(r);
+  urt_ctrl_cmd_t f = cmd_of(r, URT_CTRL_FREEDRIVE);
+  f.index = 1;
+  const double free_axes[6] = {1, 1, 0, 0, 0, 1};
+  memcpy(f.q, free_axes, sizeof f.q);
+  period(r, &f);
+  urt_ctrl_cmd_t w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  w.pose[0] = 15.0;
+  w.pose[2] = -10.0;
+  w.pose[5] = 1.0;
+  period(r, &w);
+  run(r, 0.4);
+  w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  period(r, &w);
+  run(r, 0.2);
+  urt_ctrl_cmd_t off = cmd_of(r, URT_CTRL_FREEDRIVE);
+  off.index = 0;
+  period(r, &off);
+  run(r, 0.3);
+  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_FREEDRIVE);
+  bad.index = 1;
+  bad.q[0] = 0.5;  // refused
+  period(r, &bad);
+  f = cmd_of(r, URT_CTRL_FREEDRIVE);  // all free, in a feature frame, then HALT
+  f.index = 1;
+  for (int i = 0; i < 6; i++) {
+    f.q[i] = 1.0;
+  }
+  f.pose[5] = 0.5;
+  period(r, &f);
+  run(r, 0.2);
+  send(r, URT_CTRL_HALT);
+  run(r, 0.3);
+}
+
+static void sc_force(rig_t *r) {
+  go_work(r);
+  double p[6];
+  pose_now(r, p);
+  urt_ctrl_cmd_t f = cmd_of(r, URT_CTRL_FORCE_MODE);
+  f.index = 2;
+  f.q[2] = 1.0;  // z compliant
+  f.tau[2] = -5.0;
+  for (int i = 0; i < 6; i++) {
+    f.qd[i] = i == 2 ? 0.05 : 0.1;
+  }
+  period(r, &f);
+  urt_ctrl_cmd_t w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  w.pose[2] = 3.0;
+  period(r, &w);
+  run(r, 0.3);
+  urt_ctrl_cmd_t l = cmd_of(r, URT_CTRL_SPEEDL);  // inside force mode
+  l.pose[0] = 0.02;
+  l.a = 0.5;
+  period(r, &l);
+  run(r, 0.3);
+  urt_ctrl_cmd_t sl = cmd_of(r, URT_CTRL_STOPL);
+  sl.a = 0.5;
+  period(r, &sl);
+  run(r, 0.2);
+  f.id = 0;  // new parameters, type 1 and 3
+  f.index = 1;
+  memcpy(f.pose, p, sizeof f.pose);
+  f.pose[0] += 0.3;
+  period(r, &f);
+  run(r, 0.2);
+  f.index = 3;
+  period(r, &f);
+  run(r, 0.2);
+  send(r, URT_CTRL_FORCE_MODE_END);
+  run(r, 0.4);
+  f.index = 7;  // refused
+  period(r, &f);
+  // force mode, then a movej ends it
+  f.index = 2;
+  memset(f.pose, 0, sizeof f.pose);
+  period(r, &f);
+  run(r, 0.1);
+  urt_ctrl_cmd_t mj = movej(r, kWork, 1.0, 0.5, 0.0);
+  period(r, &mj);
+  run_until_done(r, mj.id, 4.0, 0.1);
+  // a tight deviation limit and a push on a held axis: protective stop
+  urt_ctrl_cmd_t g = cmd_of(r, URT_CTRL_FORCE_MODE);
+  g.index = 2;
+  g.q[2] = 1.0;
+  g.qd[2] = 0.05;
+  g.qd[0] = 1e-4;
+  period(r, &g);
+  w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  w.pose[0] = 400.0;
+  period(r, &w);
+  run(r, 0.5);
+  w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  period(r, &w);
+  send(r, URT_CTRL_UNLOCK_PSTOP);
+  run(r, 0.1);
+}
+
+static void sc_states(rig_t *r) {
+  send(r, URT_CTRL_BRAKE_RELEASE);  // powered off: nothing moves
+  urt_ctrl_cmd_t a = movej(r, kWork, 1.0, 1.0, 0.0);
+  period(r, &a);  // refused: not running
+  send(r, URT_CTRL_POWER_ON);
+  run(r, 0.05);
+  period(r, &a);  // refused: idle
+  send(r, URT_CTRL_BRAKE_RELEASE);
+  run(r, 0.05);
+  a = movej(r, kWork, 2.0, 1.5, 0.0);
+  period(r, &a);
+  run(r, 0.4);
+  send(r, URT_CTRL_HALT);
+  run(r, 0.5);
+  urt_ctrl_cmd_t s = cmd_of(r, URT_CTRL_SET_DIGITAL_OUT);
+  s.index = 3;
+  s.value = 1.0;
+  period(r, &s);
+  s.index = 17;
+  period(r, &s);
+  s.index = 3;
+  s.value = 0.0;
+  period(r, &s);
+  s.index = 18;  // refused
+  period(r, &s);
+  s = cmd_of(r, URT_CTRL_SET_ANALOG_OUT);
+  s.index = 1;
+  s.value = 0.25;
+  period(r, &s);
+  s.value = 1.5;  // refused
+  period(r, &s);
+  s = cmd_of(r, URT_CTRL_SET_SPEED_SLIDER);
+  s.value = 2.0;  // refused
+  period(r, &s);
+  s = cmd_of(r, URT_CTRL_SET_TCP);
+  s.pose[2] = 0.1;
+  s.pose[3] = 0.2;
+  period(r, &s);
+  s = cmd_of(r, URT_CTRL_SET_PAYLOAD);
+  s.value = 1.5;
+  s.pose[2] = 0.05;
+  period(r, &s);
+  s.value = -1.0;  // refused
+  period(r, &s);
+  s = cmd_of(r, URT_CTRL_SET_GRAVITY);
+  s.pose[2] = -9.7;
+  s.pose[0] = 0.3;
+  period(r, &s);
+  s.pose[0] = 1000.0;  // refused
+  period(r, &s);
+  go_work(r);
+  double p[6];
+  pose_now(r, p);  // a line with the new TCP
+  p[1] += 0.05;
+  urt_ctrl_cmd_t l = movel(r, p, 1.0, 0.2, 0.0);
+  period(r, &l);
+  run(r, 0.2);
+  send(r, URT_CTRL_POWER_OFF);  // mid-motion
+  run(r, 0.2);
+  send(r, URT_CTRL_POWER_ON);
+  send(r, URT_CTRL_BRAKE_RELEASE);
+  run(r, 0.1);
+  urt_ctrl_cmd_t w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  w.pose[0] = 2000.0;  // refused
+  period(r, &w);
+  urt_ctrl_cmd_t b = movej(r, kWork, 1.0, 1.0, 0.0);
+  period(r, &b);
+  run_until_done(r, b.id, 4.0, 0.1);
+}
+
+static void sc_pause(rig_t *r) {
+  urt_ctrl_cmd_t play = cmd_of(r, URT_CTRL_PROGRAM_STATE);
+  play.index = URT_PROGRAM_PLAYING;
+  period(r, &play);
+  go_work(r);
+  double q[URT_NJ];
+  memcpy(q, kWork, sizeof q);
+  q[0] += 0.5;
+  urt_ctrl_cmd_t a = movej(r, q, 1.4, 1.05, 0.0);
+  period(r, &a);
+  run(r, 0.3);
+  send(r, URT_CTRL_PAUSE);
+  run(r, 0.5);
+  send(r, URT_CTRL_RESUME);
+  run_until_done(r, a.id, 5.0, 0.1);
+  double p[6];
+  pose_now(r, p);
+  p[2] += 0.06;
+  urt_ctrl_cmd_t l = movel(r, p, 1.2, 0.25, 0.0);
+  period(r, &l);
+  run(r, 0.15);
+  send(r, URT_CTRL_PAUSE);
+  run(r, 0.4);
+  send(r, URT_CTRL_RESUME);
+  run(r, 0.1);
+  slider(r, 0.6);
+  run_until_done(r, l.id, 5.0, 0.1);
+  slider(r, 1.0);
+  urt_ctrl_cmd_t sj = cmd_of(r, URT_CTRL_SPEEDJ);  // streaming: PAUSE stops it
+  sj.q[5] = 0.4;
+  sj.a = 2.0;
+  period(r, &sj);
+  run(r, 0.3);
+  send(r, URT_CTRL_PAUSE);
+  run(r, 0.3);
+  send(r, URT_CTRL_RESUME);
+  q[0] -= 0.3;
+  urt_ctrl_cmd_t b = movej(r, q, 1.4, 1.05, 0.0);  // paused, then the program stops
+  period(r, &b);
+  run(r, 0.3);
+  send(r, URT_CTRL_PAUSE);
+  run(r, 0.1);
+  urt_ctrl_cmd_t stop = cmd_of(r, URT_CTRL_PROGRAM_STATE);
+  stop.index = URT_PROGRAM_STOPPED;
+  period(r, &stop);
+  run(r, 0.5);
+  // a movej on a moving arm, paused while the stop before it runs
+  urt_ctrl_cmd_t c = movej(r, kWork, 1.4, 1.05, 0.0);
+  period(r, &c);
+  run(r, 0.2);
+  urt_ctrl_cmd_t e = movej(r, q, 1.4, 1.05, 0.0);
+  period(r, &e);
+  send(r, URT_CTRL_PAUSE);
+  run(r, 0.3);
+  send(r, URT_CTRL_RESUME);
+  run_until_done(r, e.id, 5.0, 0.1);
+}
+
+static void sc_cb3(rig_t *r) {
+  go_work(r);
+  double p[6];
+  pose_now(r, p);
+  p[0] -= 0.06;
+  urt_ctrl_cmd_t l = movel(r, p, 1.2, 0.25, 0.0);
+  period(r, &l);
+  run_until_done(r, l.id, 4.0, 0.1);
+  urt_ctrl_cmd_t s = cmd_of(r, URT_CTRL_SPEEDL);
+  s.pose[2] = 0.04;
+  s.a = 0.5;
+  s.t = 0.4;
+  period(r, &s);
+  run(r, 0.6);
+  urt_ctrl_cmd_t sv = cmd_of(r, URT_CTRL_SERVOJ);
+  for (int k = 0; k < 100; k++) {
+    memcpy(sv.q, kWork, sizeof sv.q);
+    sv.q[1] += 0.1 * sin(2.0 * M_PI * k * r->c->period);
+    sv.t = 0.008;
+    sv.lookahead_time = 0.1;
+    sv.gain = 300.0;
+    period(r, &sv);
+  }
+  run(r, 0.4);
+}
+
+typedef void (*scenario_fn)(rig_t *r);
+static const scenario_fn kScenario[SC_COUNT] = {
+    sc_movej, sc_movel, sc_servo, sc_speed, sc_direct, sc_servoc,
+    sc_torque, sc_freedrive, sc_force, sc_states, sc_pause, sc_cb3};
+
+static uint64_t run_scenario(int i) {
+  const int powered = i != SC_STATES;
+  rig_t r = rig_new(NULL, i == SC_CB3 ? 0.008 : 0.002, powered);
+  g_hash = 14695981039346656037ull;
+  g_motions = g_faults = g_pstops = 0;
+  fold(&r);
+  kScenario[i](&r);
+  print_message("%-9s motions 0x%04x faults 0x%02x pstops 0x%02x\n", kScenarioName[i], g_motions,
+                g_faults, g_pstops);
+  rig_free(&r);
+  return g_hash;
+}
+
+static void test_controller_hash__every_motion_is_bit_for_bit_as_recorded(void **state) {
+  (void)state;
+  uint64_t h[SC_COUNT];
+  for (int i = 0; i < SC_COUNT; i++) {
+    h[i] = run_scenario(i);
+  }
+  const char *rec = getenv("URT_RECORD_HASHES");
+  const recorded_t *want = NULL;
+  for (size_t k = 0; k < sizeof kRecorded / sizeof kRecorded[0]; k++) {
+    if (kRecorded[k].config && strcmp(kRecorded[k].config, config_key()) == 0) {
+      want = &kRecorded[k];
+    }
+  }
+  if ((rec && *rec && strcmp(rec, "0") != 0) || !want) {
+    printf("    {\"%s\",\n     {", config_key());
+    for (int i = 0; i < SC_COUNT; i++) {
+      printf("0x%016llxull,%s", (unsigned long long)h[i], i % 3 == 2 ? "\n      " : " ");
+    }
+    printf("}},\n");
+  }
+  if (!want) {
+    fail_msg("no hashes recorded for the configuration %s: paste the row above into kRecorded",
+             config_key());
+  }
+  int bad = 0;
+  for (int i = 0; i < SC_COUNT; i++) {
+    if (h[i] != want->hash[i]) {
+      print_message("scenario %s: hash 0x%016llx, recorded 0x%016llx\n", kScenarioName[i],
+                    (unsigned long long)h[i], (unsigned long long)want->hash[i]);
+      bad++;
+    }
+  }
+  print_message("%d of %d scenarios as recorded (%s)\n", SC_COUNT - bad, SC_COUNT, config_key());
+  assert_int_equal(bad, 0);
+}
+
+/* a short tour (under the sanitizer): a small movej, a movel on it, speedl, halt */
+static uint64_t run_short(void) {
+  rig_t r = rig_new(NULL, 0.002, 1);
+  g_hash = 14695981039346656037ull;
+  double q[URT_NJ];
+  memcpy(q, r.c->q1, sizeof q);
+  q[0] += 0.02;
+  urt_ctrl_cmd_t a = movej(&r, q, 3.0, 1.0, 0.0);
+  period(&r, &a);
+  run(&r, 0.05);
+  double p[6];
+  pose_now(&r, p);
+  p[2] += 0.005;
+  urt_ctrl_cmd_t l = movel(&r, p, 1.0, 0.1, 0.0);
+  period(&r, &l);
+  run(&r, 0.1);
+  urt_ctrl_cmd_t s = cmd_of(&r, URT_CTRL_SPEEDL);
+  s.pose[0] = 0.01;
+  s.a = 0.5;
+  period(&r, &s);
+  run(&r, 0.04);
+  send(&r, URT_CTRL_HALT);
+  run(&r, 0.04);
+  rig_free(&r);
+  return g_hash;
+}
+
+/* the same scenario twice gives the same hash (nothing uninitialised or time-dependent) */
+static void test_controller_hash__runs_are_reproducible(void **state) {
+  (void)state;
+#ifdef URT_TEST_ASAN
+  assert_true(run_short() == run_short());
+#else
+  assert_true(run_short() == run_short());
+  assert_true(run_scenario(SC_MOVEL) == run_scenario(SC_MOVEL));
+#endif
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_controller_hash__runs_are_reproducible),
+#ifndef URT_TEST_ASAN
+      cmocka_unit_test(test_controller_hash__every_motion_is_bit_for_bit_as_recorded),
+#endif
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
