@@ -125,7 +125,11 @@ typedef enum urt_ctrl_cmd_kind {
                                  index = type (1..3), qd = limits (speeds [m/s, rad/s] of the
                                  compliant axes / deviations [m, rad] of the others); not a
                                  motion: a following SPEEDL runs inside it                    */
-  URT_CTRL_FORCE_MODE_END     /* leave force mode                                           */
+  URT_CTRL_FORCE_MODE_END,    /* leave force mode                                           */
+  /* added by the motions issue (core/motion_*.cpp) */
+  URT_CTRL_OPTIMOVEJ          /* q[6], a, v: fractions in (0, 1] of every joint's maximum
+                                 acceleration and speed (qdd_max, qd_max; the planner keeps
+                                 its margins 0.9, 0.98); r as movej. A motion: done on arrival */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
