@@ -76,6 +76,7 @@ const Motion& motion_of(urt_ctrl_motion_t id) noexcept;
 // The types (one file each).
 extern const Motion kIdleMotion;       // motion_idle.cpp
 extern const Motion kMovejMotion;      // motion_movej.cpp
+extern const Motion kOptimovejMotion;  // motion_movej.cpp (a, v as fractions of the limits)
 extern const Motion kMovelMotion;      // motion_movel.cpp
 extern const Motion kStopMotion;       // motion_stop.cpp (stopj, stopl)
 extern const Motion kServojMotion;     // motion_servoj.cpp

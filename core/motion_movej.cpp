@@ -3,7 +3,8 @@
 // together (the leading joint at a, v within every joint's limits; t > 0 sets the duration when
 // the joints can make it). Its time is the path time c->traj_time, which the speed slider and
 // the pause scale. Arriving while the set-point moves, it first stops at its own deceleration
-// (c->pending) and starts from rest. Context: RT.
+// (c->pending) and starts from rest. optimovej is the same motion with a and v given as
+// fractions of the joints' own maximum acceleration and speed. Context: RT.
 #include "motion.hpp"
 
 namespace urt::core {
@@ -13,6 +14,10 @@ namespace {
 bool bad_argument(const urt_ctrl_cmd_t& cmd) {
   return !(cmd.a > 0.0) || !(cmd.v > 0.0) || !std::isfinite(cmd.a) || !std::isfinite(cmd.v) ||
          !std::isfinite(cmd.t) || cmd.t < 0.0;
+}
+
+bool bad_fraction(const urt_ctrl_cmd_t& cmd) {
+  return !(cmd.a > 0.0 && cmd.a <= 1.0) || !(cmd.v > 0.0 && cmd.v <= 1.0);
 }
 
 void plan(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
@@ -26,6 +31,17 @@ void plan(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
     D = std::fmax(D, std::fabs(mj.dq[j]));
   }
   double v = cmd.v, a = cmd.a;
+  if (cmd.kind == URT_CTRL_OPTIMOVEJ) {
+    // the fraction of every joint's limit: the joint that needs the longest sets the pace
+    v = a = HUGE_VAL;
+    for (int j = 0; j < URT_NJ && D > 0.0; j++) {
+      double f = std::fabs(mj.dq[j]) / D;
+      if (f > 0.0) {
+        v = std::fmin(v, cmd.v * kSpeedMargin * m->joint[j].qd_max / f);
+        a = std::fmin(a, cmd.a * kAccMargin * m->joint[j].qdd_max / f);
+      }
+    }
+  }
   for (int j = 0; j < URT_NJ && D > 0.0; j++) {
     double f = std::fabs(mj.dq[j]) / D;  // this joint's share of the leading axis' motion
     if (f > 0.0) {
@@ -33,7 +49,7 @@ void plan(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
       a = std::fmin(a, kAccMargin * m->joint[j].qdd_max / f);
     }
   }
-  if (cmd.t > 0.0) {
+  if (cmd.t > 0.0 && cmd.kind == URT_CTRL_MOVEJ) {
     // t overrides a and v, but never beyond the joints' limits
     urt_trap_t fit = trap_plan(D, v, a, cmd.t);
     if (fit.vp <= v * 1.0000001 && fit.ap <= a * 1.0000001) {
@@ -54,7 +70,14 @@ void start(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const MotionStart&) {
   if (moving(c)) {
     c->pending = cmd;
     c->has_pending = 1;
-    start_stop(c, joint_stop_time(c, cmd.a));
+    double a_stop = cmd.a;
+    if (cmd.kind == URT_CTRL_OPTIMOVEJ) {  // the fraction of the slowest joint's limit
+      a_stop = HUGE_VAL;
+      for (int j = 0; j < URT_NJ; j++) {
+        a_stop = std::fmin(a_stop, cmd.a * kAccMargin * e.m->joint[j].qdd_max);
+      }
+    }
+    start_stop(c, joint_stop_time(c, a_stop));
   } else {
     plan(e, cmd);
   }
@@ -85,6 +108,8 @@ uint32_t tick(const MotionEnv& e) {
 
 }  // namespace
 
+const Motion kOptimovejMotion = {URT_MOTION_MOVEJ,    false, false,        false,  bad_fraction,
+                                 joint_target_faults, start, tick, stop_on_path, nullptr};
 const Motion kMovejMotion = {URT_MOTION_MOVEJ, false, false,        false,  bad_argument,
                              joint_target_faults, start, tick, stop_on_path, nullptr};
 

@@ -8,6 +8,8 @@ const Motion* motion_for_command(const urt_ctrl_cmd_t& cmd) noexcept {
   switch (cmd.kind) {
     case URT_CTRL_MOVEJ:
       return &kMovejMotion;
+    case URT_CTRL_OPTIMOVEJ:
+      return &kOptimovejMotion;
     case URT_CTRL_MOVEL:
       return &kMovelMotion;
     case URT_CTRL_SERVOJ:

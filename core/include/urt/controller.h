@@ -127,8 +127,12 @@ typedef enum urt_ctrl_cmd_kind {
                                  motion: a following SPEEDL runs inside it                    */
   URT_CTRL_FORCE_MODE_END,    /* leave force mode                                           */
   URT_CTRL_SET_TOOL_VOLTAGE,  /* value = 0, 12 or 24: the tool connector's supply [V]        */
-  URT_CTRL_PROTECTIVE_STOP    /* URScript protective_stop(): a protective stop now (RUNNING
+  URT_CTRL_PROTECTIVE_STOP,   /* URScript protective_stop(): a protective stop now (RUNNING
                                  only), fault URT_CTRL_FAULT_SCRIPT_PSTOP (C209A0 on 30001)   */
+  /* added by the motions issue (core/motion_*.cpp) */
+  URT_CTRL_OPTIMOVEJ          /* q[6], a, v: fractions in (0, 1] of every joint's maximum
+                                 acceleration and speed (qdd_max, qd_max; the planner keeps
+                                 its margins 0.9, 0.98); r as movej. A motion: done on arrival */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
