@@ -92,10 +92,10 @@ typedef struct recorded {
 /* recorded from the code before the motions became objects (see the commit message) */
 static const recorded_t kRecorded[] = {
     {"gcc-O+fma",
-     {0x94deb752347bf21dull, 0x5c06e1308ec6f53cull, 0xbbf6db9f224f0374ull,
-      0xebe99792b08bb646ull, 0x95e8b749bc06d2feull, 0x3cfa83493353e3abull,
-      0xa30101473f3a3473ull, 0x62a5626a41412d16ull, 0xd754d89cefd58376ull,
-      0x872157e5f854271eull, 0xedd6bcb46cd01ceeull, 0xdd2067a680854e70ull}},
+     {0xc14ba1b7a030df3eull, 0xad9f55c80a83267eull, 0x025f24ef2a2577d9ull,
+      0x67fa1c821964f993ull, 0xe6d75ddbebc0906aull, 0x3b1f49730a0ab836ull,
+      0x6783921fb07c81e2ull, 0x0dbf734adafe1d2aull, 0x9141321cc69541fbull,
+      0xe1dbc6cdf7c9ce03ull, 0x7cc4c5623c10d350ull, 0x99369d25bd2ed8f3ull}},
 };
 
 /* ---- hashing ---- */
