@@ -88,7 +88,6 @@ static const us_builtin kUnsupported[] = {
     {"servol", NULL, 0, P(NULL)},
     {"rpc_factory", NULL, 0, P(NULL)},
     // the controller's motions and modes that urtwin does not have yet
-    {"optimovej", NULL, 0, P(NULL)},
     {"optimovel", NULL, 0, P(NULL)},
     // no external force/torque sensor input in urtwin
     {"ft_rtde_input_enable", NULL, 0, P(NULL)},

@@ -59,6 +59,21 @@ static int b_movej(vm *V, const us_node *n, sv *a, sv *out) {
   return b_move(V, n, a, out, URT_CTRL_MOVEJ, 1.4, 1.05);
 }
 
+/* optimovej(q, a=0.3, v=0.3, r=0): a and v are fractions in (0, 1] of the joints' limits; the
+ * controller (core/motion_movej.cpp) refuses fractions outside it */
+static int b_optimovej(vm *V, const us_node *n, sv *a, sv *out) {
+  urt_ctrl_cmd_t c = {.kind = URT_CTRL_OPTIMOVEJ};
+  double x[6];
+  bool is_pose;
+  if (urt__us_arg_vec6(V, n, a, 0, x, &is_pose) != X_OK ||
+      urt__us_arg_num(V, n, a, 1, 0.3, &c.a) != X_OK ||
+      urt__us_arg_num(V, n, a, 2, 0.3, &c.v) != X_OK ||
+      urt__us_arg_num(V, n, a, 3, 0, &c.r) != X_OK || to_joints(V, n, x, is_pose, c.q) != X_OK) {
+    return X_ERR;
+  }
+  return urt__us_motion(V, n, "optimovej", &c, true);
+}
+
 static int b_movel(vm *V, const us_node *n, sv *a, sv *out) {
   return b_move(V, n, a, out, URT_CTRL_MOVEL, 1.2, 0.25);
 }
@@ -253,6 +268,7 @@ static int b_is_steady(vm *V, const us_node *n, sv *a, sv *out) {
 const us_builtin urt__us_builtins_robot[] = {
     // motion
     {"movej", b_movej, 1, P("q", "a", "v", "t", "r")},
+    {"optimovej", b_optimovej, 1, P("q", "a", "v", "r")},
     {"movel", b_movel, 1, P("pose", "a", "v", "t", "r")},
     {"servoj", b_servoj, 1, P("q", "a", "v", "t", "lookahead_time", "gain")},
     {"speedj", b_speedj, 2, P("qd", "a", "t", "t_min")},

@@ -32,7 +32,7 @@ RTDE_VERSIONS = [(3, 15), (5, 19), (5, 23), (10, 11)]
 MOTIONS = "issue 9 item 1 (motions and modes) brings it"
 PENDING = {
     # motions the controller does not have yet (item 1 of issue 9): the builtins come with them
-    "movep": MOTIONS, "movec": MOTIONS, "optimovej": MOTIONS, "optimovel": MOTIONS,
+    "movep": MOTIONS, "movec": MOTIONS, "optimovel": MOTIONS,
     # no state behind them in the controller yet
     "get_target_payload_inertia": "the controller keeps no payload inertia (payload issue)",
     "get_target_waypoint": "needs the active motion's target (motions)",

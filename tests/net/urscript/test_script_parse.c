@@ -113,7 +113,7 @@ static void test_parse__unknown_function_is_a_compile_error_at_its_position(void
 static void test_parse__unsupported_function_compiles_for_a_runtime_error(void **state) {
   // a controller function urtwin does not run compiles (client scripts hold such calls in
   // branches their commands pick); reaching it is a runtime error naming it (script_interp)
-  us_prog *p = parse_ok("def f():\n  if False:\n    optimovej([0,0,0,0,0,0])\n  end\nend\n");
+  us_prog *p = parse_ok("def f():\n  if False:\n    movec([0,0,0,0,0,0], [0,0,0,0,0,0])\n  end\nend\n");
   urt__us_prog_free(p);
 }
 
