@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/dds/dds_bridge.c — the DDS entities, the publisher thread and the command thread.
  * Context: non-RT throughout; nothing here runs on the physics thread. */
-#define _GNU_SOURCE /* pthread_timedjoin_np */
 #include "urt/net/dds_bridge.h"
 
 #include <ctype.h>
@@ -705,14 +704,9 @@ int urt_dds_bridge_start(urt_dds_bridge_t *b) {
 }
 
 static void join_bounded(urt_dds_bridge_t *b, pthread_t t, const char *name) {
-  struct timespec deadline;
-  clock_gettime(CLOCK_REALTIME, &deadline);
-  deadline.tv_sec += JOIN_TIMEOUT_S;
-  int rc = pthread_timedjoin_np(t, NULL, &deadline);
-  if (rc != 0) {
-    fprintf(stderr, "urt_dds: %s thread did not stop within %d s (%s); abandoning it\n", name,
-            JOIN_TIMEOUT_S, strerror(rc));
-    pthread_detach(t);
+  char who[64];
+  snprintf(who, sizeof who, "urt_dds: %s", name);
+  if (urt_thread_join_bounded(t, JOIN_TIMEOUT_S, who) != 0) {
     b->abandoned = 1;
   }
 }

@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/lcm/lcm_bridge.c — the LCM publisher and command-subscriber threads over a tick source.
  * Context: non-RT throughout; nothing here runs on the physics thread. */
-#define _GNU_SOURCE /* pthread_timedjoin_np */
 #include "urt/net/lcm_bridge.h"
 
 #include <errno.h>
@@ -386,14 +385,9 @@ int urt_lcm_bridge_start(urt_lcm_bridge_t *b) {
 }
 
 static void join_bounded(urt_lcm_bridge_t *b, pthread_t t, const char *name) {
-  struct timespec deadline;
-  clock_gettime(CLOCK_REALTIME, &deadline);
-  deadline.tv_sec += JOIN_TIMEOUT_S;
-  int rc = pthread_timedjoin_np(t, NULL, &deadline);
-  if (rc != 0) {
-    fprintf(stderr, "urt_lcm: %s thread did not stop within %d s (%s); abandoning it\n", name,
-            JOIN_TIMEOUT_S, strerror(rc));
-    pthread_detach(t);
+  char who[64];
+  snprintf(who, sizeof who, "urt_lcm: %s", name);
+  if (urt_thread_join_bounded(t, JOIN_TIMEOUT_S, who) != 0) {
     b->abandoned = 1;
   }
 }

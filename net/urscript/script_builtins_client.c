@@ -16,16 +16,6 @@
 #include "script_vm.h"
 #include "urt/core.h"
 
-static int vec_out(vm *V, const us_node *n, const double *x, int len, sv *out) {
-  sv *l = urt__us_salloc(V, n, (size_t)len * sizeof *l);
-  if (!l) return X_ERR;
-  for (int j = 0; j < len; j++) l[j] = mk_float(x[j]);
-  out->t = V_LIST;
-  out->n = len;
-  out->u.l = l;
-  return X_OK;
-}
-
 static void pose_inv(const double p[6], double o[6]) {
   double R[9], Rt[9];
   urt__us_rotvec_to_mat(p + 3, R);
@@ -57,20 +47,20 @@ static int b_get_actual_joint_positions_history(vm *V, const us_node *n, sv *a, 
     return urt__us_fail(V, n, "get_actual_joint_positions_history: %lld steps back is outside 0..%llu",
                         (long long)steps, (unsigned long long)now->tick);
   }
-  if (steps == 0) return vec_out(V, n, now->q, 6, out);
+  if (steps == 0) return urt__us_list_out(V, n, now->q, 6, out);
   urt_snapshot_t past;
   if (!h->snapshot_at || h->snapshot_at(h->ctx, now->tick - (uint64_t)steps, &past) != 0) {
     return urt__us_fail(V, n, "get_actual_joint_positions_history: %lld steps back is older than the controller keeps",
                         (long long)steps);
   }
-  return vec_out(V, n, past.q, 6, out);
+  return urt__us_list_out(V, n, past.q, 6, out);
 }
 
 
 /* get_joint_positions(): the old name of get_actual_joint_positions (URCL's script calls it) */
-static int b_get_joint_positions(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->q, 6, out); }
-static int b_get_actual_joint_accelerations(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->qdd, 6, out); }
-static int b_get_tcp_force(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->tcp_force, 6, out); }
+static int b_get_joint_positions(vm *V, const us_node *n, sv *a, sv *out) { return urt__us_list_out(V, n, urt__us_snap(V)->q, 6, out); }
+static int b_get_actual_joint_accelerations(vm *V, const us_node *n, sv *a, sv *out) { return urt__us_list_out(V, n, urt__us_snap(V)->qdd, 6, out); }
+static int b_get_tcp_force(vm *V, const us_node *n, sv *a, sv *out) { return urt__us_list_out(V, n, urt__us_snap(V)->tcp_force, 6, out); }
 
 /* force(): the size of the force part of the TCP wrench (UR: the norm of Fx, Fy, Fz) */
 static int b_force(vm *V, const us_node *n, sv *a, sv *out) {
@@ -79,7 +69,7 @@ static int b_force(vm *V, const us_node *n, sv *a, sv *out) {
   return X_OK;
 }
 
-static int b_get_tool_accelerometer_reading(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->tool_accel, 3, out); }
+static int b_get_tool_accelerometer_reading(vm *V, const us_node *n, sv *a, sv *out) { return urt__us_list_out(V, n, urt__us_snap(V)->tool_accel, 3, out); }
 
 static int b_get_joint_temp(vm *V, const us_node *n, sv *a, sv *out) {
   int64_t j;
@@ -130,7 +120,7 @@ static int b_get_inverse_kin(vm *V, const us_node *n, sv *a, sv *out) {
   bool found = false;
   if (ik(V, n, a, q, &found) != X_OK) return X_ERR;
   if (!found) return urt__us_fail(V, n, "get_inverse_kin: no solution for the pose");
-  return vec_out(V, n, q, 6, out);
+  return urt__us_list_out(V, n, q, 6, out);
 }
 
 /* get_forward_kin(q, tcp): the pose of tool tcp (absent: the active TCP) at q (absent: actual) */

@@ -103,17 +103,8 @@ static int b_norm(vm *V, const us_node *n, sv *a, sv *out) {
 //---- strings and lists ----
 
 static bool mk_str(vm *V, const us_node *at, const char *s, size_t n, sv *out) {
-  if (n > URT_SCRIPT_MAX_STRING) {
-    n = URT_SCRIPT_MAX_STRING;
-  }
-  char *d = urt__us_salloc(V, at, n + 1);
-  if (!d) return false;
-  memcpy(d, s, n);
-  d[n] = 0;
-  out->t = V_STR;
-  out->n = (int32_t)n;
-  out->u.s = d;
-  return true;
+  return urt__us_str_out(V, at, s, n > URT_SCRIPT_MAX_STRING ? URT_SCRIPT_MAX_STRING : n, out) ==
+         X_OK;
 }
 
 static bool to_str(vm *V, const us_node *at, const sv *v, sv *out) {

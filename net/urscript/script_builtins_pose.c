@@ -33,16 +33,6 @@ static int vec3(vm *V, const us_node *n, const sv *a, int k, double x[3]) {
   return X_OK;
 }
 
-static int list_out(vm *V, const us_node *n, const double *x, int len, sv *out) {
-  sv *l = urt__us_salloc(V, n, (size_t)len * sizeof *l);
-  if (!l) return X_ERR;
-  for (int j = 0; j < len; j++) l[j] = mk_float(x[j]);
-  out->t = V_LIST;
-  out->n = len;
-  out->u.l = l;
-  return X_OK;
-}
-
 static void transpose(const double R[9], double T[9]) {
   for (int i = 0; i < 3; i++) {
     for (int j = 0; j < 3; j++) T[3 * i + j] = R[3 * j + i];
@@ -132,7 +122,7 @@ static int b_rotvec2rpy(vm *V, const us_node *n, sv *a, sv *out) {
     rpy[0] = atan2(-R[5], R[4]);
     rpy[2] = 0;
   }
-  return list_out(V, n, rpy, 3, out);
+  return urt__us_list_out(V, n, rpy, 3, out);
 }
 
 static int b_rpy2rotvec(vm *V, const us_node *n, sv *a, sv *out) {
@@ -140,7 +130,7 @@ static int b_rpy2rotvec(vm *V, const us_node *n, sv *a, sv *out) {
   if (vec3(V, n, a, 0, rpy) != X_OK) return X_ERR;
   rpy_to_mat(rpy, R);
   urt__us_mat_to_rotvec(R, r);
-  return list_out(V, n, r, 3, out);
+  return urt__us_list_out(V, n, r, 3, out);
 }
 
 /* normalize(v): v / norm(v) for a list of numbers; all zeros is an error, as UR documents */
@@ -155,7 +145,7 @@ static int b_normalize(vm *V, const us_node *n, sv *a, sv *out) {
   if (!(s > 0) || !isfinite(s)) return urt__us_fail(V, n, "normalize: the list has no direction (all zeros)");
   s = sqrt(s);
   for (int j = 0; j < a[0].n; j++) x[j] /= s;
-  return list_out(V, n, x, a[0].n, out);
+  return urt__us_list_out(V, n, x, a[0].n, out);
 }
 
 //---- table ----

@@ -229,19 +229,7 @@ static int b_set_payload_cog(vm *V, const us_node *n, sv *a, sv *out) {
 
 //---- state ----
 
-static bool mk_list(vm *V, const us_node *at, const double *x, int n, sv *out) {
-  sv *l = urt__us_salloc(V, at, (size_t)n * sizeof *l);
-  if (!l) return false;
-  for (int k = 0; k < n; k++) {
-    l[k] = mk_float(x[k]);
-  }
-  out->t = V_LIST;
-  out->n = n;
-  out->u.l = l;
-  return true;
-}
-
-static int vec_out(vm *V, const us_node *n, const double *x, sv *out) { return mk_list(V, n, x, 6, out) ? X_OK : X_ERR; }
+static int vec_out(vm *V, const us_node *n, const double *x, sv *out) { return urt__us_list_out(V, n, x, 6, out); }
 
 static int b_get_actual_joint_positions(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->q, out); }
 static int b_get_target_joint_positions(vm *V, const us_node *n, sv *a, sv *out) { return vec_out(V, n, urt__us_snap(V)->q_target, out); }

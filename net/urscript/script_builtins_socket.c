@@ -90,17 +90,6 @@ static sv *new_list(vm *V, const us_node *n, int len, sv *out) {
   return l;
 }
 
-static int new_str(vm *V, const us_node *n, const uint8_t *s, size_t len, sv *out) {
-  char *d = urt__us_salloc(V, n, len + 1);
-  if (!d) return X_ERR;
-  memcpy(d, s, len);
-  d[len] = 0;
-  out->t = V_STR;
-  out->n = (int32_t)len;
-  out->u.s = d;
-  return X_OK;
-}
-
 //---- waiting ----
 
 /* What a read needs from the buffer: 1 done (consumed, result in ctx), 0 not yet, -1 invalid
@@ -342,7 +331,7 @@ static int b_socket_read_line(vm *V, const us_node *n, sv *a, sv *out) {
   }
   c->plen = c->slen = c->len = 0;
   if (read_wait(V, n, name, timeout, take_line, c, &ok) != X_OK) return X_ERR;
-  return new_str(V, n, c->got, ok ? c->len : 0, out);
+  return urt__us_str_out(V, n, (const char *)c->got, ok ? c->len : 0, out);
 }
 
 static int b_socket_read_string(vm *V, const us_node *n, sv *a, sv *out) {
@@ -361,7 +350,7 @@ static int b_socket_read_string(vm *V, const us_node *n, sv *a, sv *out) {
   c->slen = clean_marker(c->suffix, escapes);
   c->len = 0;
   if (read_wait(V, n, name, timeout, take_string, c, &ok) != X_OK) return X_ERR;
-  return new_str(V, n, c->got, ok ? c->len : 0, out);
+  return urt__us_str_out(V, n, (const char *)c->got, ok ? c->len : 0, out);
 }
 
 //---- sends ----

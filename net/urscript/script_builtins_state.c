@@ -10,18 +10,8 @@
 #include "script_vm.h"
 #include "urt/core.h"
 
-static int list_out(vm *V, const us_node *at, const double *x, int n, sv *out) {
-  sv *l = urt__us_salloc(V, at, (size_t)n * sizeof *l);
-  if (!l) return X_ERR;
-  for (int k = 0; k < n; k++) l[k] = mk_float(x[k]);
-  out->t = V_LIST;
-  out->n = n;
-  out->u.l = l;
-  return X_OK;
-}
-
 static int matrix_out(vm *V, const us_node *at, const double A[36], sv *out) {
-  if (list_out(V, at, A, 36, out) != X_OK) return X_ERR;
+  if (urt__us_list_out(V, at, A, 36, out) != X_OK) return X_ERR;
   out->t = V_MATRIX;
   out->cols = 6;
   return X_OK;
@@ -42,15 +32,15 @@ static int b_get_steptime(vm *V, const us_node *n, sv *a, sv *out) {
 }
 
 static int b_get_target_tcp_speed(vm *V, const us_node *n, sv *a, sv *out) {
-  return list_out(V, n, urt__us_snap(V)->tcp_speed_target, 6, out);
+  return urt__us_list_out(V, n, urt__us_snap(V)->tcp_speed_target, 6, out);
 }
 
 static int b_get_joint_torques(vm *V, const us_node *n, sv *a, sv *out) {
-  return list_out(V, n, urt__us_snap(V)->tau, 6, out);
+  return urt__us_list_out(V, n, urt__us_snap(V)->tau, 6, out);
 }
 
 static int b_get_target_joint_accelerations(vm *V, const us_node *n, sv *a, sv *out) {
-  return list_out(V, n, urt__us_snap(V)->qdd_target, 6, out);
+  return urt__us_list_out(V, n, urt__us_snap(V)->qdd_target, 6, out);
 }
 
 static int b_get_target_payload(vm *V, const us_node *n, sv *a, sv *out) {
@@ -59,7 +49,7 @@ static int b_get_target_payload(vm *V, const us_node *n, sv *a, sv *out) {
 }
 
 static int b_get_target_payload_cog(vm *V, const us_node *n, sv *a, sv *out) {
-  return list_out(V, n, urt__us_snap(V)->payload_cog, 3, out);
+  return urt__us_list_out(V, n, urt__us_snap(V)->payload_cog, 3, out);
 }
 
 static int b_get_freedrive_status(vm *V, const us_node *n, sv *a, sv *out) {
@@ -123,7 +113,7 @@ static int b_get_coriolis_and_centrifugal_torques(vm *V, const us_node *n, sv *a
   urt_arm_rnea(m, s->q, s->qd, zero, tau);
   urt_arm_gravity(m, s->q, g);
   for (int j = 0; j < 6; j++) tau[j] -= g[j];
-  return list_out(V, n, tau, 6, out);
+  return urt__us_list_out(V, n, tau, 6, out);
 }
 
 static bool within_limits(const urt_model_t *m, const double q[6]) {

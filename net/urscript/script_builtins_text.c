@@ -18,17 +18,6 @@ static int need_str(vm *V, const us_node *n, const sv *a, int k) {
   return X_OK;
 }
 
-static int str_out(vm *V, const us_node *n, const char *s, size_t len, sv *out) {
-  char *d = urt__us_salloc(V, n, len + 1);
-  if (!d) return X_ERR;
-  memcpy(d, s, len);
-  d[len] = 0;
-  out->t = V_STR;
-  out->n = (int32_t)len;
-  out->u.s = d;
-  return X_OK;
-}
-
 /* length(v) and size(v) of a list or a string (a pose has 6) */
 static int b_length(vm *V, const us_node *n, sv *a, sv *out) {
   if (a[0].t == V_LIST || a[0].t == V_STR) *out = mk_int(a[0].n);
@@ -48,7 +37,7 @@ static int b_str_at(vm *V, const us_node *n, sv *a, sv *out) {
   int64_t k;
   if (need_str(V, n, a, 0) != X_OK || urt__us_arg_int(V, n, a, 1, &k) != X_OK) return X_ERR;
   if (k < 0 || k >= a[0].n) return urt__us_fail(V, n, "str_at: index %lld outside the string (length %d)", (long long)k, a[0].n);
-  return str_out(V, n, a[0].u.s + k, 1, out);
+  return urt__us_str_out(V, n, a[0].u.s + k, 1, out);
 }
 
 /* str_find(src, target, start_from=0): the first index of target at or after start_from, or -1 */
@@ -81,7 +70,7 @@ static int b_str_sub(vm *V, const us_node *n, sv *a, sv *out) {
   if (a[2].t != V_NONE && len < 0) return urt__us_fail(V, n, "str_sub: negative length %lld", (long long)len);
   int64_t rest = a[0].n - k;
   if (len < 0 || len > rest) len = rest;
-  return str_out(V, n, a[0].u.s + k, (size_t)len, out);
+  return urt__us_str_out(V, n, a[0].u.s + k, (size_t)len, out);
 }
 
 /* to_num(str): an int when the text is one, else a float; anything else is an error */

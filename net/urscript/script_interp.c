@@ -50,6 +50,27 @@ void *urt__us_salloc(vm *V, const us_node *at, size_t n) {
   return p;
 }
 
+int urt__us_list_out(vm *V, const us_node *at, const double *x, int n, sv *out) {
+  sv *l = urt__us_salloc(V, at, (size_t)(n ? n : 1) * sizeof *l);
+  if (!l) return X_ERR;
+  for (int k = 0; k < n; k++) l[k] = mk_float(x[k]);
+  out->t = V_LIST;
+  out->n = n;
+  out->u.l = l;
+  return X_OK;
+}
+
+int urt__us_str_out(vm *V, const us_node *at, const char *s, size_t n, sv *out) {
+  char *d = urt__us_salloc(V, at, n + 1);
+  if (!d) return X_ERR;
+  memcpy(d, s, n);
+  d[n] = 0;
+  out->t = V_STR;
+  out->n = (int32_t)n;
+  out->u.s = d;
+  return X_OK;
+}
+
 //---- values ----
 
 static void vfree(sv *v) {

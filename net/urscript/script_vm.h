@@ -124,6 +124,10 @@ int urt__us_fail(vm *V, const us_node *at, const char *fmt, ...);
 /* n bytes of scratch, 16-aligned, freed after the statement; NULL (error set) when full. */
 void *urt__us_salloc(vm *V, const us_node *at, size_t n);
 
+/* A list of n floats, or a string copy of s[0..n), in scratch: X_OK, or X_ERR when full. */
+int urt__us_list_out(vm *V, const us_node *at, const double *x, int n, sv *out);
+int urt__us_str_out(vm *V, const us_node *at, const char *s, size_t n, sv *out);
+
 //---- threads (script_sched.c) ----
 
 /* The interpreter's side, called by the scheduler (script_interp.c): a thread's vm, and running

@@ -22,6 +22,12 @@ int urt_thread_start(pthread_t *t, void *(*fn)(void *), void *arg, size_t stack_
  * emulator must also run unprivileged. Context: non-RT. Returns 0 or the error number. */
 int urt_thread_set_fifo(pthread_t t, int priority, const char *what);
 
+/* Join thread t, waiting at most timeout_s seconds: a thread stuck in a library call (LCM,
+ * Cyclone) must not hang the emulator's shutdown. On timeout it prints one line naming the
+ * thread (who: "urt_lcm: publisher"), detaches it and returns -1: the caller must then keep
+ * what the thread uses alive. Context: non-RT. Returns 0 once joined. */
+int urt_thread_join_bounded(pthread_t t, int timeout_s, const char *who);
+
 #ifdef __cplusplus
 }
 #endif
