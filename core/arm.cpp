@@ -618,6 +618,27 @@ void urt_arm_forward_dynamics(const urt_model_t* m, const double q[URT_NJ],
   Eigen::Map<Vec6>{qdd} = a;
 }
 
+void urt_arm_rnea_payload(const urt_model_t* m, const urt_payload_t* p, const double q[URT_NJ],
+                          const double qd[URT_NJ], const double qdd[URT_NJ], double tau[URT_NJ]) {
+  Vec6 t;
+  urt::core::rnea(m->arm, *p, vec6(q), vec6(qd), vec6(qdd), t);
+  Eigen::Map<Vec6>{tau} = t;
+}
+
+void urt_arm_mass_matrix_payload(const urt_model_t* m, const urt_payload_t* p,
+                                 const double q[URT_NJ], double M[36]) {
+  Mat6 Mc;
+  urt::core::crba(m->arm, *p, vec6(q), Mc);
+  Eigen::Map<RowMat6>{M} = Mc;
+}
+
+void urt_arm_gravity_payload(const urt_model_t* m, const urt_payload_t* p, const double q[URT_NJ],
+                             double g[URT_NJ]) {
+  Vec6 t;
+  urt::core::gravity(m->arm, *p, vec6(q), t);
+  Eigen::Map<Vec6>{g} = t;
+}
+
 double urt_arm_energy(const urt_model_t* m, const double q[URT_NJ], const double qd[URT_NJ]) {
   return urt::core::energy(m->arm, m->payload, vec6(q), vec6(qd));
 }

@@ -33,7 +33,7 @@ extern "C" const char* urt_payload_invalid(const urt_payload_t* p) {
   }
   for (int i = 0; i < 6; i++) {
     if (std::fabs(p->inertia[i]) > URT_PAYLOAD_INERTIA_MAX) {
-      return "payload inertia elements must be within ±1 kg m²";
+      return "payload inertia elements must be within ±133 kg m² (URScript's bound)";
     }
   }
 

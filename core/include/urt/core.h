@@ -115,6 +115,15 @@ void urt_arm_forward_dynamics(const urt_model_t *m, const double q[URT_NJ],
                               const double qd[URT_NJ], const double tau[URT_NJ],
                               double qdd[URT_NJ]);
 
+/* The same three with an explicit payload on link 6 instead of the model's (what a running
+ * robot carries: urt_data_t.live.payload, or the snapshot's payload fields). Context: RT. */
+void urt_arm_rnea_payload(const urt_model_t *m, const urt_payload_t *p, const double q[URT_NJ],
+                          const double qd[URT_NJ], const double qdd[URT_NJ], double tau[URT_NJ]);
+void urt_arm_mass_matrix_payload(const urt_model_t *m, const urt_payload_t *p,
+                                 const double q[URT_NJ], double M[36]);
+void urt_arm_gravity_payload(const urt_model_t *m, const urt_payload_t *p, const double q[URT_NJ],
+                             double g[URT_NJ]);
+
 /* Kinetic plus potential energy of the rigid arm (potential zero at the base origin). */
 double urt_arm_energy(const urt_model_t *m, const double q[URT_NJ], const double qd[URT_NJ]);
 

@@ -47,7 +47,7 @@ typedef struct urt_payload {
 
 #define URT_PAYLOAD_MASS_MAX 5.0  /* UR5 rated payload [kg] */
 #define URT_PAYLOAD_COG_MAX 1.0   /* |CoG component| bound: within a metre of the flange [m] */
-#define URT_PAYLOAD_INERTIA_MAX 1.0 /* |inertia element| bound [kg m²] */
+#define URT_PAYLOAD_INERTIA_MAX 133.0 /* |inertia element| bound: URScript's [kg m²] */
 
 /* Why a payload is not physical, or NULL when it is: finite, 0 ≤ mass ≤ URT_PAYLOAD_MASS_MAX,
  * |cog_i| ≤ URT_PAYLOAD_COG_MAX, |I_ij| ≤ URT_PAYLOAD_INERTIA_MAX and the inertia matrix
