@@ -93,7 +93,6 @@ static const us_builtin kUnsupported[] = {
     {"ft_rtde_input_enable", NULL, 0, P(NULL)},
     {"enable_external_ft_sensor", NULL, 0, P(NULL)},
     // no controller state behind them yet
-    {"get_target_payload_inertia", NULL, 0, P(NULL)},
     {"get_target_waypoint", NULL, 0, P(NULL)},
 };
 #undef P

@@ -5,9 +5,8 @@
  * inverse kinematics with qnear and tcp honoured and a solution check, joint limits, Coriolis
  * torques, set_gravity / set_target_payload / set_tool_voltage, and popup.
  *
- * set_target_payload stores mass and centre of gravity exactly as set_payload does (the
- * controller's SET_PAYLOAD; the payload does not enter the dynamics yet); the inertia rides in
- * the command for when the controller keeps it, and the transition time is applied at once.
+ * set_target_payload (script_builtins_modes.c) mounts mass, centre of gravity and inertia on
+ * link 6 through the controller's SET_PAYLOAD; the transition time is applied at once.
  */
 #include <math.h>
 #include <stdio.h>

@@ -134,27 +134,34 @@ static int b_protective_stop(vm *V, const us_node *n, sv *a, sv *out) {
   return urt__us_submit(V, n, &c);
 }
 
+/* set_target_payload(m, cog, inertia=[0]*6, transition_time=0): mass, CoG in the flange frame,
+ * inertia about the CoG with flange-parallel axes (UR's conventions), mounted on link 6 at the
+ * next controller tick (core/payload.cpp). A payload the physics cannot carry (over 5 kg, a CoG
+ * beyond 1 m, a non-physical inertia) is a runtime error with urt_payload_invalid()'s reason.
+ * transition_time is checked but not modelled: the change is at once (as with t = 0). */
 static int b_set_target_payload(vm *V, const us_node *n, sv *a, sv *out) {
   urt_ctrl_cmd_t c = {.kind = URT_CTRL_SET_PAYLOAD};
   double t;
   if (urt__us_arg_num(V, n, a, 0, 0, &c.value) != X_OK || urt__us_arg_num(V, n, a, 3, 0, &t) != X_OK) return X_ERR;
-  if (!(c.value >= 0)) return urt__us_fail(V, n, "set_target_payload: invalid mass %g", c.value);
   if (a[1].t != V_LIST || a[1].n != 3) return urt__us_fail(V, n, "Type error: set_target_payload: cog must be 3 numbers");
   for (int j = 0; j < 3; j++) {
     if (!is_num(&a[1].u.l[j])) return urt__us_fail(V, n, "Type error: set_target_payload: cog element %d is %s", j, type_name(a[1].u.l[j].t));
     c.pose[j] = num(&a[1].u.l[j]);
   }
   if (a[2].t != V_NONE) {
-    // the model has a point-mass payload: an inertia other than zero cannot be honoured
     if (a[2].t != V_LIST || a[2].n != 6) return urt__us_fail(V, n, "Type error: set_target_payload: inertia must be 6 numbers");
     for (int j = 0; j < 6; j++) {
-      if (!is_num(&a[2].u.l[j]) || num(&a[2].u.l[j]) != 0) {
-        return urt__us_fail(V, n, "set_target_payload: a payload inertia is not modelled by urtwin (point mass only)");
-      }
+      if (!is_num(&a[2].u.l[j])) return urt__us_fail(V, n, "Type error: set_target_payload: inertia element %d is %s", j, type_name(a[2].u.l[j].t));
+      c.tau[j] = num(&a[2].u.l[j]);
     }
   }
-  if (t < 0) return urt__us_fail(V, n, "set_target_payload: negative transition_time %g", t);
-  return urt__us_submit(V, n, &c);  // the transition is immediate (transition_time not modelled)
+  if (!(t >= 0)) return urt__us_fail(V, n, "set_target_payload: negative transition_time %g", t);
+  urt_payload_t p = {.mass = c.value};
+  memcpy(p.cog, c.pose, sizeof p.cog);
+  memcpy(p.inertia, c.tau, sizeof p.inertia);
+  const char *why = urt_payload_invalid(&p);
+  if (why) return urt__us_fail(V, n, "set_target_payload: %s", why);
+  return urt__us_submit(V, n, &c);
 }
 
 //---- table ----

@@ -194,14 +194,18 @@ static int b_set_tcp(vm *V, const us_node *n, sv *a, sv *out) {
   return urt__us_submit(V, n, &c);
 }
 
-static int b_set_payload(vm *V, const us_node *n, sv *a, sv *out) {
+/* set_payload(m[, cog]) and the two setters below are one SET_PAYLOAD each (mounted on link 6
+ * at the next tick). set_payload leaves a point mass (UR: an omitted inertia is a zero
+ * matrix); set_payload_mass and set_payload_cog keep the rest of the mounted payload. */
+static int payload_submit(vm *V, const us_node *n, sv *a, const double *inertia, const char *fn) {
   // set_payload(m, CoG=…) spells the second parameter two ways
   if (a[1].t == V_NONE) a[1] = a[2];
   urt_ctrl_cmd_t c = {.kind = URT_CTRL_SET_PAYLOAD};
   if (urt__us_arg_num(V, n, a, 0, 0, &c.value) != X_OK) return X_ERR;
-  if (c.value < 0) return urt__us_fail(V, n, "set_payload: negative mass %g", c.value);
+  if (c.value < 0) return urt__us_fail(V, n, "%s: negative mass %g", fn, c.value);
   const urt_snapshot_t *s = urt__us_snap(V);
   memcpy(c.pose, s->payload_cog, sizeof s->payload_cog);
+  if (inertia) memcpy(c.tau, inertia, 6 * sizeof *c.tau);
   if (a[1].t != V_NONE) {
     // CoG as [x, y, z], (x, y, z) or a pose (position part)
     if (a[1].t == V_POSE) {
@@ -210,20 +214,29 @@ static int b_set_payload(vm *V, const us_node *n, sv *a, sv *out) {
                is_num(&a[1].u.l[2])) {
       for (int j = 0; j < 3; j++) c.pose[j] = num(&a[1].u.l[j]);
     } else {
-      return urt__us_fail(V, n, "Type error: set_payload center of gravity must be 3 numbers");
+      return urt__us_fail(V, n, "Type error: %s center of gravity must be 3 numbers", fn);
     }
   }
+  urt_payload_t p = {.mass = c.value};
+  memcpy(p.cog, c.pose, sizeof p.cog);
+  memcpy(p.inertia, c.tau, sizeof p.inertia);
+  const char *why = urt_payload_invalid(&p);
+  if (why) return urt__us_fail(V, n, "%s: %s", fn, why);
   return urt__us_submit(V, n, &c);
+}
+
+static int b_set_payload(vm *V, const us_node *n, sv *a, sv *out) {
+  return payload_submit(V, n, a, NULL, "set_payload");
 }
 
 static int b_set_payload_mass(vm *V, const us_node *n, sv *a, sv *out) {
   sv args[MAX_ARGS] = {a[0]};
-  return b_set_payload(V, n, args, out);
+  return payload_submit(V, n, args, urt__us_snap(V)->payload_inertia, "set_payload_mass");
 }
 
 static int b_set_payload_cog(vm *V, const us_node *n, sv *a, sv *out) {
   sv args[MAX_ARGS] = {mk_float(urt__us_snap(V)->payload_mass), a[0]};
-  return b_set_payload(V, n, args, out);
+  return payload_submit(V, n, args, urt__us_snap(V)->payload_inertia, "set_payload_cog");
 }
 
 

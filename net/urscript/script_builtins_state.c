@@ -52,6 +52,18 @@ static int b_get_target_payload_cog(vm *V, const us_node *n, sv *a, sv *out) {
   return urt__us_list_out(V, n, urt__us_snap(V)->payload_cog, 3, out);
 }
 
+static int b_get_target_payload_inertia(vm *V, const us_node *n, sv *a, sv *out) {
+  return list_out(V, n, urt__us_snap(V)->payload_inertia, 6, out);
+}
+
+/* the payload the arm carries now, as the snapshot reports it */
+static urt_payload_t mounted(const urt_snapshot_t *s) {
+  urt_payload_t p = {.mass = s->payload_mass};
+  memcpy(p.cog, s->payload_cog, sizeof p.cog);
+  memcpy(p.inertia, s->payload_inertia, sizeof p.inertia);
+  return p;
+}
+
 static int b_get_freedrive_status(vm *V, const us_node *n, sv *a, sv *out) {
   // 0: not in freedrive; 1: freedrive (urtwin does not report the near-limit states 2, 3)
   *out = mk_int(urt__us_snap(V)->motion == URT_MOTION_FREEDRIVE ? 1 : 0);
@@ -76,7 +88,8 @@ static int b_get_mass_matrix(vm *V, const us_node *n, sv *a, sv *out) {
   const urt_model_t *m = model(V, n);
   if (!m) return X_ERR;
   double M[36];
-  urt_arm_mass_matrix(m, urt__us_snap(V)->q, M);
+  const urt_payload_t p = mounted(urt__us_snap(V));
+  urt_arm_mass_matrix_payload(m, &p, urt__us_snap(V)->q, M);
   return matrix_out(V, n, M, out);
 }
 
@@ -110,8 +123,9 @@ static int b_get_coriolis_and_centrifugal_torques(vm *V, const us_node *n, sv *a
   if (!m) return X_ERR;
   const urt_snapshot_t *s = urt__us_snap(V);
   double zero[6] = {0}, tau[6], g[6];
-  urt_arm_rnea(m, s->q, s->qd, zero, tau);
-  urt_arm_gravity(m, s->q, g);
+  const urt_payload_t p = mounted(s);
+  urt_arm_rnea_payload(m, &p, s->q, s->qd, zero, tau);
+  urt_arm_gravity_payload(m, &p, s->q, g);
   for (int j = 0; j < 6; j++) tau[j] -= g[j];
   return urt__us_list_out(V, n, tau, 6, out);
 }
@@ -166,6 +180,7 @@ const us_builtin urt__us_builtins_state[] = {
     {"get_target_joint_accelerations", b_get_target_joint_accelerations, 0, P(NULL)},
     {"get_target_payload", b_get_target_payload, 0, P(NULL)},
     {"get_target_payload_cog", b_get_target_payload_cog, 0, P(NULL)},
+    {"get_target_payload_inertia", b_get_target_payload_inertia, 0, P(NULL)},
     {"get_freedrive_status", b_get_freedrive_status, 0, P(NULL)},
     {"get_actual_tool_flange_pose", b_get_actual_tool_flange_pose, 0, P(NULL)},
     {"get_mass_matrix", b_get_mass_matrix, 0, P("include_rotors_inertia")},

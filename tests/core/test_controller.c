@@ -754,6 +754,55 @@ static void test_direct__follows_external_setpoints(void **state) {
   rig_free(&r);
 }
 
+/* SET_PAYLOAD mounts the payload at the tick boundary: the physics, the feed-forward planned by
+ * that tick and the snapshot all carry it; a payload no body can be is refused and changes
+ * nothing */
+static void test_controller__set_payload_mounts_it_at_the_next_tick(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  const double q[6] = {0.5, -0.3, 0.4, -0.8, 1.0, 0.5};
+  urt_ctrl_cmd_t mv = movej_to(&r, q, 1.4, 1.05);
+  run_until_done(&r, &mv, 10.0);
+  run_for(&r, 0.5);
+  double ff0[6];
+  memcpy(ff0, r.c->tau_model1, sizeof ff0);
+  urt_ctrl_cmd_t p = cmd_of(&r, URT_CTRL_SET_PAYLOAD);
+  p.value = 3.0;
+  p.pose[2] = 0.1;
+  p.tau[0] = 0.004;
+  p.tau[1] = 0.005;
+  p.tau[2] = 0.003;
+  rig_period(&r, &p);
+  assert_true(r.d->live.payload.mass == 3.0 && r.d->live.payload.cog[2] == 0.1 &&
+              r.d->live.payload.inertia[1] == 0.005);
+  assert_true(r.c->payload_mass == 3.0 && r.c->payload_cog[2] == 0.1);
+  // this tick's feed-forward rose by the payload's gravity at the held set-point
+  double g0[6], g1[6];
+  urt_arm_gravity_payload(r.m, &(urt_payload_t){0}, r.c->q1, g0);
+  urt_arm_gravity_payload(r.m, &r.d->live.payload, r.c->q1, g1);
+  for (int j = 0; j < URT_NJ; j++) {
+    print_message("joint %d: feed-forward %+.6f → %+.6f N m, Δg %+.6f N m\n", j + 1, ff0[j],
+                  r.c->tau_model1[j], g1[j] - g0[j]);
+    assert_near(r.c->tau_model1[j] - ff0[j], g1[j] - g0[j], 1e-3);
+  }
+  urt_snapshot_t s;
+  urt_snapshot_fill(r.m, r.c, r.d, &s);
+  assert_true(s.payload_mass == 3.0 && s.payload_cog[2] == 0.1 && s.payload_inertia[2] == 0.003);
+
+  // refused: over the UR5's 5 kg, and a tensor no body has
+  r.c->fault = 0;
+  p.value = 6.0;
+  rig_period(&r, &p);
+  assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
+  p.value = 1.0;
+  p.tau[3] = 0.01;  // Ixy² > Ixx Iyy
+  r.c->fault = 0;
+  rig_period(&r, &p);
+  assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
+  assert_true(r.d->live.payload.mass == 3.0 && r.c->payload_mass == 3.0);
+  rig_free(&r);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_movej__trapezoid_time_and_settling_e_series),
@@ -773,6 +822,7 @@ int main(void) {
       cmocka_unit_test(test_snapshot__tcp_force_recovers_applied_wrench),
       cmocka_unit_test(test_snapshot__fields_follow_the_physics),
       cmocka_unit_test(test_direct__follows_external_setpoints),
+      cmocka_unit_test(test_controller__set_payload_mounts_it_at_the_next_tick),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -306,6 +306,36 @@ static void test_model_load__rejects_out_of_range_value(void **state) {
   free(bad);
 }
 
+static void test_model_load__rejects_a_payload_the_ur5_cannot_carry(void **state) {
+  (void)state;
+  int line;
+  char *bad = edit(ur5_text, "payload:", "mass: 0.0", "mass: 5.5", &line);
+  expect_error(bad, NULL, URT_ECONFIG, ":%d: payload.mass: must be in [0, 5] (got 5.5)", line);
+  free(bad);
+  bad = edit(ur5_text, "payload:", "cog: [0.0, 0.0, 0.0]", "cog: [0.0, 0.0, 1.5]", &line);
+  expect_error(bad, NULL, URT_ECONFIG, ":%d: payload.cog[2]: must be in [-1, 1] (got 1.5)", line);
+  free(bad);
+  // a tensor no body has: Ixy beyond what Ixx and Iyy allow
+  bad = edit(ur5_text, "payload:", "inertia: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]",
+             "inertia: [0.01, 0.01, 0.01, 0.02, 0.0, 0.0]", &line);
+  expect_error(bad, NULL, URT_ECONFIG,
+               ":%d: payload.inertia: payload inertia must be positive semi-definite (a real "
+               "body's)", line);
+  free(bad);
+}
+
+static void test_model_load__payload_override_reaches_the_model(void **state) {
+  (void)state;
+  const char *const ov[] = {"payload.mass=3.0", "payload.cog=[0.0, 0.0, 0.1]",
+                            "payload.inertia=[0.004, 0.005, 0.003, 0.0005, 0.0, -0.0004]", NULL};
+  urt_model_t *m = urt_test_model(ov);
+  assert_true(m->payload.mass == 3.0 && m->payload.cog[2] == 0.1 && m->payload.inertia[5] == -0.0004);
+  urt_data_t d;
+  assert_int_equal(urt_data_init(m, &d, NULL), 0);
+  assert_memory_equal(&d.live.payload, &m->payload, sizeof m->payload);  // the run starts with it
+  urt_model_free(m);
+}
+
 static void test_model_load__rejects_non_finite_value(void **state) {
   (void)state;
   int line;
@@ -519,6 +549,8 @@ int main(void) {
       cmocka_unit_test(test_model_load__rejects_override_index_out_of_range),
       cmocka_unit_test(test_model_load__rejects_override_of_unknown_key),
       cmocka_unit_test(test_model_load__rejects_override_with_bad_yaml),
+      cmocka_unit_test(test_model_load__rejects_a_payload_the_ur5_cannot_carry),
+      cmocka_unit_test(test_model_load__payload_override_reaches_the_model),
       cmocka_unit_test(test_model_load__rejects_override_that_breaks_a_cross_check),
       cmocka_unit_test(test_model_load__reports_file_line_when_override_is_fine),
   };

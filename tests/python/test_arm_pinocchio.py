@@ -7,7 +7,8 @@ joint placed at F_{i−1}·Transl(z, d_i)·Rot(z, θ_i) in joint i−1's frame, 
 F = Transl(x, a)·Rot(x, α)·Rot(y, β) is the constant tail of the previous link's transform;
 link i's inertia (given in DH frame i about its CoM, model.md §1.8) is carried into joint i's
 frame by F_i. Every quantity must agree to 1e-9 relative on 1000 random states, for the bare
-flange of config/ur5.yaml and again with a tool (TCP offset and rotation) set by an override.
+flange of config/ur5.yaml, again with a tool (TCP offset and rotation) set by an override, and
+with a payload (config `payload:`) appended to link 6 as a second Pinocchio body of joint 6.
 """
 
 import types
@@ -59,6 +60,13 @@ def build_pinocchio(params):
         tail = link_tail(link)
         model.appendBodyToJoint(joint, tail.act(body), pin.SE3.Identity())
         parent = joint
+    # the payload: CoG in the flange frame (DH frame 6, as link 6's CoM), inertia about the CoG
+    load = params["payload"]
+    ixx, iyy, izz, ixy, ixz, iyz = load["inertia"]
+    inertia_c = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    model.appendBodyToJoint(parent, tail.act(pin.Inertia(float(load["mass"]),
+                                                         np.array(load["cog"], dtype=float),
+                                                         inertia_c)), pin.SE3.Identity())
     tcp = np.array(arm["tcp"], dtype=float)
     tcp_frame = model.addFrame(
         pin.Frame("tcp", parent, tail * pin.SE3(pin.exp3(tcp[3:]), tcp[:3]),
@@ -68,8 +76,13 @@ def build_pinocchio(params):
 
 # the bare flange of config/ur5.yaml, and a tool 15 cm out, turned by 2.35 rad
 TOOL = [0.01, -0.02, 0.15, 0.3, -1.2, 2.0]
+# and a 3 kg payload off the flange axis with a full inertia tensor (a 0.1 × 0.06 × 0.04 m
+# block, turned so that the products of inertia are not zero)
+PAYLOAD = ("payload.mass=3.0", "payload.cog=[0.02, -0.015, 0.1]",
+           "payload.inertia=[0.0013, 0.0029, 0.0034, 0.0004, -0.0002, 0.0003]")
 VARIANTS = {"bare_flange": ((), [0.0] * 6),
-            "tool": ((f"arm.tcp=[{', '.join(map(repr, TOOL))}]",), TOOL)}
+            "tool": ((f"arm.tcp=[{', '.join(map(repr, TOOL))}]",), TOOL),
+            "payload": (PAYLOAD, [0.0] * 6)}
 
 
 @pytest.fixture(scope="module", params=list(VARIANTS))
@@ -78,6 +91,7 @@ def arm(request, urtwin_lib, ur5_params):
     overrides, tcp = VARIANTS[request.param]
     params = urt.resolved_model(urt.UR5_YAML, overrides) if overrides else ur5_params
     assert params["arm"]["tcp"] == pytest.approx(tcp, abs=1e-15)
+    assert params["payload"]["mass"] == (3.0 if request.param == "payload" else 0.0)
     model, tcp_frame = build_pinocchio(params)
     with urt.Model(urtwin_lib, urt.UR5_YAML, overrides) as ours:
         yield types.SimpleNamespace(urt=ours, params=params, model=model,

@@ -145,6 +145,7 @@ def test_printed_values_are_the_files_values(resolved_json, config):
         for key, value in config["thermal"][j["size"]].items():
             assert got["thermal"][key] == value, f"thermal.{key}"
         assert got["thermal"]["t_amb"] == config["thermal"]["t_amb"]
+    assert resolved_json["payload"] == config["payload"]
 
 
 def test_config_numbers_read_as_numbers_in_yaml_1_1(config):
@@ -186,6 +187,7 @@ BAD_FILES = [
     (None, "drives_engaged: true", "drives_engaged: yes",
      "simulation.drives_engaged: must be true or false (got 'yes')"),
     ("name: shoulder", "kt: 0.1361", "kt: 0.1361: 2", "syntax error: illegal map value"),
+    ("payload:", "mass: 0.0", "mass: 6.0", "payload.mass: must be in [0, 5] (got 6.0)"),
 ]
 
 

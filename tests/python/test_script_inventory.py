@@ -34,7 +34,6 @@ PENDING = {
     # motions the controller does not have yet (item 1 of issue 9): the builtins come with them
     "movep": MOTIONS, "movec": MOTIONS, "optimovel": MOTIONS,
     # no state behind them in the controller yet
-    "get_target_payload_inertia": "the controller keeps no payload inertia (payload issue)",
     "get_target_waypoint": "needs the active motion's target (motions)",
     # urtwin has no external force/torque sensor input
     "ft_rtde_input_enable": "no external F/T sensor input in urtwin",

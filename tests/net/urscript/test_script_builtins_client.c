@@ -208,9 +208,17 @@ static void test_client__gravity_and_target_payload_commands(void **state) {
   memset(&R.err, 0, sizeof R.err);
   assert_int_not_equal(sr_run(&R, "set_target_payload(-1, [0, 0, 0])\n"), 0);
   memset(&R.err, 0, sizeof R.err);
-  // the payload is a point mass in urtwin: an inertia it would ignore is refused, not dropped
-  assert_int_not_equal(sr_run(&R, "set_target_payload(1, [0, 0, 0], [0.01, 0.02, 0.03, 0, 0, 0])\n"), 0);
-  assert_non_null(strstr(R.err.text, "inertia"));
+  // the inertia rides in tau (Ixx Iyy Izz Ixy Ixz Iyz about the CoG), mounted by the controller
+  sr_must(&R, "set_target_payload(1, [0, 0, 0.1], [0.01, 0.02, 0.03, 0.001, 0, 0])\n");
+  assert_int_equal(R.f.cmd[3].kind, URT_CTRL_SET_PAYLOAD);
+  assert_true(R.f.cmd[3].tau[0] == 0.01 && R.f.cmd[3].tau[1] == 0.02 && R.f.cmd[3].tau[2] == 0.03 &&
+              R.f.cmd[3].tau[3] == 0.001 && R.f.cmd[3].tau[5] == 0);
+  // a body no payload can be, and more than the UR5 carries, are runtime errors saying why
+  assert_int_not_equal(sr_run(&R, "set_target_payload(1, [0, 0, 0], [0.01, 0.01, 0.01, 0.5, 0, 0])\n"), 0);
+  assert_non_null(strstr(R.err.text, "positive semi-definite"));
+  memset(&R.err, 0, sizeof R.err);
+  assert_int_not_equal(sr_run(&R, "set_payload(5.5)\n"), 0);
+  assert_non_null(strstr(R.err.text, "set_payload: payload mass must be within [0, 5] kg"));
   memset(&R.err, 0, sizeof R.err);
   assert_int_not_equal(sr_run(&R, "set_gravity([0, 0])\n"), 0);
 }
