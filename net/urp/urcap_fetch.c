@@ -6,7 +6,8 @@
  *
  * Differences from the URCap, on purpose: the URCap reads one line and then only what is
  * already buffered (BufferedReader.ready()), so a reply split across TCP segments can be cut
- * short; here the reply is read until the server has been quiet for the read timeout or closes.
+ * short; here the reply is read until the server has been quiet for the read timeout or closes,
+ * or, once what came ends with a newline, quiet for SETTLE_MS.
  * The whole exchange is bounded (total_timeout_ms, FETCH_MAX bytes) and cancellable.
  */
 #ifndef _GNU_SOURCE
@@ -30,6 +31,7 @@
 
 #define STEP_MS 50              /* how often a wait looks at the cancel flag        */
 #define FETCH_MAX (1u << 20)    /* longest reply: the runner's URT_SCRIPT_MAX_TEXT */
+#define SETTLE_MS 20            /* quiet time that ends a reply ending in a newline */
 
 static long long now_ms(void) {
   struct timespec ts;
@@ -161,7 +163,12 @@ int urt_urcap_fetch(const urt_urcap_config_t *in, char **text, size_t *len) {
   urp_text got = {0};
   int timeout = 0, closed = 0;
   for (;;) {
-    long long quiet_until = now_ms() + cfg.read_timeout_ms;
+    // a reply that ends with a whole line is taken once the server has been quiet for
+    // SETTLE_MS (the URCap takes what is buffered at once; URCL writes the program in one
+    // write): waiting the full read timeout after it would delay every play by 500 ms, and
+    // URCL's URCap tests wait only 500 ms for the program after `play`
+    bool whole = got.len && got.p[got.len - 1] == '\n';
+    long long quiet_until = now_ms() + (whole ? SETTLE_MS : cfg.read_timeout_ms);
     long long until = quiet_until < end_all ? quiet_until : end_all;
     int w = wait_fd(&cfg, fd, POLLIN, until);
     if (w < 0) {

@@ -250,6 +250,42 @@ static int step(vm *V, const us_node *at) {
 static int eval(vm *V, const us_node *n, sv *out);
 static int exec_block(vm *V, const us_node *b);
 
+static int arith(vm *V, const us_node *n, int op, const sv *a, const sv *b, sv *out);
+
+/* Lists of numbers are vectors (URCL's script: `q + qd * steptime`, `norm(end_q - start_q)`,
+ * `(-3 * q0 + q1 * 3 - …) / pow(t, 2)`): list ± list of the same length element by element,
+ * list * number, number * list and list / number on each element; each element follows the
+ * scalar rules (int op int stays int). Any other combination is a type error. */
+static int list_arith(vm *V, const us_node *n, int op, const sv *a, const sv *b, sv *out) {
+  bool both = a->t == V_LIST && b->t == V_LIST;
+  bool ok = both ? (op == T_PLUS || op == T_MINUS)
+                 : a->t == V_LIST ? is_num(b) && (op == T_STAR || op == T_SLASH)
+                                  : is_num(a) && op == T_STAR;
+  if (!ok) {
+    return urt__us_fail(V, n, "Type error: operator not defined for %s and %s", type_name(a->t),
+                        type_name(b->t));
+  }
+  if (both && a->n != b->n) {
+    return urt__us_fail(V, n, "Type error: lists of different lengths (%d and %d)", a->n, b->n);
+  }
+  int len = a->t == V_LIST ? a->n : b->n;
+  sv *l = urt__us_salloc(V, n, (size_t)(len ? len : 1) * sizeof *l);
+  if (!l) return X_ERR;
+  for (int k = 0; k < len; k++) {
+    const sv *x = a->t == V_LIST ? &a->u.l[k] : a;
+    const sv *y = b->t == V_LIST ? &b->u.l[k] : b;
+    if (!is_num(x) || !is_num(y)) {
+      return urt__us_fail(V, n, "Type error: list element %d is %s, not a number", k,
+                          type_name(is_num(x) ? y->t : x->t));
+    }
+    if (arith(V, n, op, x, y, &l[k]) != X_OK) return X_ERR;
+  }
+  out->t = V_LIST;
+  out->n = len;
+  out->u.l = l;
+  return X_OK;
+}
+
 static int arith(vm *V, const us_node *n, int op, const sv *a, const sv *b, sv *out) {
   // string concatenation is not URScript (str_cat is): numbers only, plus pose/list element-wise
   if (is_num(a) && is_num(b)) {
@@ -280,6 +316,9 @@ static int arith(vm *V, const us_node *n, int op, const sv *a, const sv *b, sv *
         *out = mk_float(fmod(x, y));
         return X_OK;
     }
+  }
+  if (a->t == V_LIST || b->t == V_LIST) {
+    return list_arith(V, n, op, a, b, out);
   }
   if (a->t == V_POSE && b->t == V_POSE && (op == T_PLUS || op == T_MINUS)) {
     double p[6];
@@ -593,6 +632,13 @@ static int eval(vm *V, const us_node *n, sv *out) {
         *out = mk_int(n->op == T_MINUS ? (int64_t)(0 - (uint64_t)a.u.i) : a.u.i);
       } else if (a.t == V_FLOAT) {
         *out = mk_float(n->op == T_MINUS ? -a.u.f : a.u.f);
+      } else if (a.t == V_LIST) {
+        sv minus_one = mk_int(-1);  // element-wise: -i stays int, -x flips the sign exactly
+        if (n->op == T_MINUS) {
+          rc = list_arith(V, n, T_STAR, &a, &minus_one, out);
+        } else {
+          *out = a;
+        }
       } else if (a.t == V_POSE && n->op == T_MINUS) {
         double p[6];
         for (int k = 0; k < 6; k++) p[k] = -a.u.p[k];

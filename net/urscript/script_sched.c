@@ -285,6 +285,21 @@ static bool program_over(const us_sched *S) {
   return S->err->kind != US_ERR_NONE || S->halted || S->main->done;
 }
 
+/* A critical section is not interrupted between waits: once its holder can run in this tick,
+ * no other thread runs before it has run (its next wait or its exit_critical). While the holder
+ * waits (it has had its turn in this tick), the others run: URCL's external-control script
+ * waits in socket_read_binary_integer inside its main loop's critical section and its
+ * servoThread holds one across servoj, each re-entering at once after exit_critical; if a
+ * waiting holder kept the others out, one of the two would starve, which on a controller it
+ * does not (the robot follows URCL's servo stream). */
+static bool holder_runs_first(us_sched *S) {
+  us_thread *h = thread_find(S, S->critical);
+  if (!h || h->done) {
+    return false;
+  }
+  return h->killed || !(h->parked && h->parked_tick >= S->tick);
+}
+
 /* one controller tick: passes over the threads in creation order until none is runnable */
 static void run_tick(us_sched *S) {
   bool ran = true;
@@ -305,7 +320,7 @@ static void run_tick(us_sched *S) {
       if (t->parked && t->parked_tick >= S->tick) {
         continue;  // had its turn this tick
       }
-      if (S->critical && S->critical != t->id) {
+      if (S->critical && S->critical != t->id && holder_runs_first(S)) {
         continue;
       }
       resume(S, t);

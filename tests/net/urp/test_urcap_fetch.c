@@ -111,6 +111,28 @@ static void test_fetch_and_split(void **state) {
   free(text);
 }
 
+static void test_reply_ending_in_a_newline_is_taken_without_the_read_timeout(void **state) {
+  (void)state;
+  // URCL's ScriptSender: the program in one write ending in "\n", the socket left open; the
+  // fetch must not wait out the 500 ms read timeout (URCL waits 500 ms for the program after
+  // play); the old rule (quiet for 500 ms) took at least that long by construction
+  fake_t f = {.parts = {kProgram}};
+  fake_start(&f);
+  urt_urcap_config_t c = config(f.port);
+  char *text;
+  size_t len;
+  struct timespec t0, t1;
+  clock_gettime(CLOCK_MONOTONIC, &t0);
+  assert_int_equal(urt_urcap_fetch(&c, &text, &len), 0);
+  clock_gettime(CLOCK_MONOTONIC, &t1);
+  fake_stop(&f);
+  double ms = (t1.tv_sec - t0.tv_sec) * 1e3 + (t1.tv_nsec - t0.tv_nsec) / 1e6;
+  assert_true(ms < 500.0);
+  assert_int_equal(len, strlen(kProgram));
+  assert_memory_equal(text, kProgram, len);
+  free(text);
+}
+
 static void test_split_without_markers(void **state) {
   (void)state;
   char *header, *body;
@@ -265,6 +287,7 @@ static void test_cancel(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_fetch_and_split),
+      cmocka_unit_test(test_reply_ending_in_a_newline_is_taken_without_the_read_timeout),
       cmocka_unit_test(test_split_without_markers),
       cmocka_unit_test(test_split_urcl_script),
       cmocka_unit_test(test_timeout_popup),

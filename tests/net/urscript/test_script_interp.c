@@ -289,6 +289,27 @@ static void test_interp__pose_functions(void **state) {
   assert_non_null(strstr(R.f.msg[1].text, "p[1.1,1.2,1.3,0,0,1.5708]"));
 }
 
+static void test_interp__lists_are_vectors(void **state) {
+  // URCL's external-control script: extrapolation, spline coefficients, norm of a difference
+  must_run("q = [1, 2.5, 0, 0, 0, 0]\n"
+           "qd = [0.5, -1, 0, 0, 0, 2]\n"
+           "textmsg(q + qd * 0.002)\n"
+           "textmsg((-3 * q + q * 3 - qd * 2 * 1.5) / pow(1.5, 2))\n"
+           "textmsg(norm([3, 4] - [0, 0]), -[1, -2.5])\n"
+           "textmsg([1, 2] + [3, 4], [6, 4] / 2)\n");
+  assert_string_equal(R.f.msg[0].text, "[1.001,2.498,0,0,0,0.004]");
+  assert_string_equal(R.f.msg[1].text, "[-0.666667,1.33333,0,0,0,-2.66667]");
+  assert_string_equal(R.f.msg[2].text, "5[-1,2.5]");
+  assert_string_equal(R.f.msg[3].text, "[4,6][3,2]");
+  for (int k = 0; k < 3; k++) {
+    static const char *bad[] = {"x = [1, 2] + [1, 2, 3]\n", "x = [1, 2] + 1\n", "x = 2 / [1, 2]\n"};
+    setup(state);
+    assert_int_equal(run_text(bad[k], 0), -1);
+    assert_int_equal(R.err.kind, US_ERR_RUNTIME);
+    assert_non_null(strstr(R.err.text, "Type error"));
+  }
+}
+
 static void test_interp__loop_that_never_yields_is_too_much_behind(void **state) {
   assert_int_equal(run_text("def f():\n  x = 0\n  while True:\n    x = 1\n  end\nend\n", 10000), -1);
   assert_int_equal(R.err.kind, US_ERR_RUNTIME);
@@ -374,6 +395,7 @@ int main(void) {
       cmocka_unit_test_setup(test_interp__matrices_pose_sub_and_mode_commands, setup),
       cmocka_unit_test_setup(test_interp__halt_inside_a_function_ends_the_program_normally, setup),
       cmocka_unit_test_setup(test_interp__pose_functions, setup),
+      cmocka_unit_test_setup(test_interp__lists_are_vectors, setup),
       cmocka_unit_test_setup(test_interp__loop_that_never_yields_is_too_much_behind, setup),
       cmocka_unit_test_setup(test_interp__loop_with_sync_runs_until_stopped, setup),
       cmocka_unit_test_setup(test_interp__refused_motion_stops_the_program, setup),

@@ -178,7 +178,44 @@ static void test_sched__kill_stops_a_thread_and_join_returns(void **state) {
   assert_int_equal(n_servo, 5);
 }
 
-static void test_sched__critical_section_holds_the_other_threads(void **state) {
+/* the index of the first servoj whose q[0] is v, from command from */
+static int find_servoj(double v, int from) {
+  for (int k = from; k < F.n_cmd; k++) {
+    if (F.cmd[k].kind == URT_CTRL_SERVOJ && F.cmd[k].q[0] == v) {
+      return k;
+    }
+  }
+  return -1;
+}
+
+static void test_sched__critical_section_holder_runs_first_after_its_wait(void **state) {
+  // t waits inside its critical section; in the next tick it runs before the body, which is
+  // older and would otherwise run first
+  must_run("def p():\n"
+           "  thread t():\n"
+           "    enter_critical\n"
+           "    sync()\n"
+           "    servoj([9, 0, 0, 0, 0, 0], t=0.002)\n"
+           "    exit_critical\n"
+           "  end\n"
+           "  h = run t()\n"
+           "  i = 0\n"
+           "  while i < 4:\n"
+           "    servoj([i, 0, 0, 0, 0, 0], t=0.002)\n"
+           "    i = i + 1\n"
+           "  end\n"
+           "  join h\n"
+           "end\n");
+  int t9 = find_servoj(9, 0), b1 = find_servoj(1, 0), b0 = find_servoj(0, 0);
+  assert_true(b0 >= 0 && t9 >= 0 && b1 >= 0);
+  assert_true(b0 < t9);                                  // tick 0: the body, then t enters
+  assert_int_equal(F.cmd_vm_tick[t9], F.cmd_vm_tick[b1]);  // tick 1: both …
+  assert_true(t9 < b1);                                  // … the holder first
+}
+
+static void test_sched__a_wait_inside_a_critical_section_lets_the_others_run(void **state) {
+  // URCL's pattern: the body waits inside a critical section (there a socket read), a thread
+  // keeps commanding every tick meanwhile
   must_run("def p():\n"
            "  thread t():\n"
            "    while True:\n"
@@ -196,13 +233,14 @@ static void test_sched__critical_section_holds_the_other_threads(void **state) {
            "  sync()\n"
            "  kill h\n"
            "end\n");
-  int first = fake_find_cmd(&F, URT_CTRL_SERVOJ, 0);
-  assert_true(first > 0);
-  for (int k = first; k < first + 3; k++) {
-    assert_int_equal(F.cmd[k].kind, URT_CTRL_SERVOJ);  // nothing of t in between
+  int first = find_servoj(1, 0), third = find_servoj(3, 0);
+  assert_true(first > 0 && third > first);
+  assert_int_equal(F.cmd_vm_tick[third] - F.cmd_vm_tick[first], 2);
+  int between = 0;
+  for (int k = first; k < third; k++) {
+    between += F.cmd[k].kind == URT_CTRL_SET_DIGITAL_OUT;
   }
-  assert_int_equal(F.cmd_vm_tick[first + 2] - F.cmd_vm_tick[first], 2);
-  assert_true(fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, first) > first + 2);
+  assert_int_equal(between, 2);  // t ran in each of the two ticks the body waited in
 }
 
 static void test_sched__halt_in_a_thread_ends_the_program(void **state) {
@@ -268,7 +306,8 @@ int main(void) {
       cmocka_unit_test_setup(test_sched__same_stream_however_late_the_runner_is, setup),
       cmocka_unit_test_setup(test_sched__runaway_thread_is_too_much_behind_and_stops_the_program, setup),
       cmocka_unit_test_setup(test_sched__kill_stops_a_thread_and_join_returns, setup),
-      cmocka_unit_test_setup(test_sched__critical_section_holds_the_other_threads, setup),
+      cmocka_unit_test_setup(test_sched__critical_section_holder_runs_first_after_its_wait, setup),
+      cmocka_unit_test_setup(test_sched__a_wait_inside_a_critical_section_lets_the_others_run, setup),
       cmocka_unit_test_setup(test_sched__halt_in_a_thread_ends_the_program, setup),
       cmocka_unit_test_setup(test_sched__error_in_a_thread_stops_every_thread, setup),
       cmocka_unit_test_setup(test_sched__recursion_limit_in_a_thread, setup),
