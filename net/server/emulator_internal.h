@@ -53,6 +53,17 @@ struct urt_emulator {
   int listen_fd[URT__N_PORTS];
   int epoll_fd, tick_fd, msg_fd;
   urt__client_t *clients;
+
+  /* connection caps (emulator.c): clients per port, the spare descriptor that drains a
+   * listener when the table is full, listeners paused when even that failed, what every
+   * client's output may hold together, and the refusals not yet logged */
+  int max_clients;
+  int port_clients[URT__N_PORTS];
+  int reserve_fd;
+  int64_t listen_paused_until_ns[URT__N_PORTS];  /* 0: listening */
+  urt_tcp_budget_t out_budget;
+  uint64_t unlogged_cap[URT__N_PORTS], unlogged_fds;
+  int64_t last_refusal_log_ns;
   uint64_t streamed_tick;        /* last tick handed to the ports */
 
   /* 30001–30003 */
@@ -94,7 +105,7 @@ struct urt_emulator {
   int started;
 
   _Atomic uint64_t n_clients, rt_packets, rt_dropped, state_messages, ticks_lost, scripts,
-      rtde_packages, rtde_dropped;
+      rtde_packages, rtde_dropped, refused_cap, refused_fds, out_bytes, out_refused;
 };
 
 /* Hooks of one kind of port. Nullable: every hook. */
