@@ -230,6 +230,12 @@ def decode_robot_message(body):
     elif mtype == 10:
         line, col = struct.unpack_from(">II", rest, 0)
         msg.update(line=line, column=col, text=rest[8:].decode(errors="replace"))
+    elif mtype == 6:
+        code, arg, level, dtype, data = struct.unpack_from(">iiiII", rest, 0)
+        msg.update(code=code, argument=arg, level=level, text=rest[20:].decode(errors="replace"))
+    elif mtype == 5:
+        code, arg, mode = struct.unpack_from(">iiB", rest, 0)
+        msg.update(code=code, argument=arg, safety_mode=mode)
     elif mtype == 3:
         n = rest[0]
         msg.update(project=rest[1:1 + n].decode(), major=rest[1 + n], minor=rest[2 + n])
