@@ -67,6 +67,16 @@ struct Options {
   double out_budget_mib = URT_EMULATOR_OUT_BUDGET / 1048576.0;
 };
 
+// One line: the commands each ring could not take, by producer ("rtde 12, dashboard 0, …").
+void print_ring_drops(const urt_loop_t* loop) {
+  std::string line;
+  for (int i = 0; i < urt_loop_producer_count(loop); i++) {
+    line += (i ? ", " : "") + std::string(urt_loop_producer_name(loop, i)) + " " +
+            std::to_string(urt_loop_producer_dropped(loop, i));
+  }
+  std::fprintf(stderr, "urtwin: commands dropped per ring: %s\n", line.c_str());
+}
+
 // Raise the soft descriptor limit to the hard one: the caps, not a distribution's default of
 // 1024, should be what refuses clients (8 ports at the cap hold 256). Best effort.
 void raise_nofile_limit() {
@@ -428,6 +438,7 @@ int main(int argc, char** argv) {
                    (unsigned long long)es.clients, (unsigned long long)es.refused_cap,
                    (unsigned long long)es.refused_fds, (unsigned long long)(es.out_bytes / 1024),
                    (unsigned long long)es.out_refused);
+      print_ring_drops(loop);
       if (dds) {
         print_dds_stats(dds);
       }
@@ -448,6 +459,7 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",
                (unsigned long long)s.ticks, (unsigned long long)s.overruns,
                (unsigned long long)s.missed_periods);
+  print_ring_drops(loop);
   urt_dds_bridge_destroy(dds);
   urt_lcm_bridge_destroy(bridge);
   urt_emulator_destroy(emu);

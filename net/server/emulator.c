@@ -76,15 +76,15 @@ void urt__send_to(urt_emulator_t *e, bool (*want)(int kind), const uint8_t *buf,
   }
 }
 
-void urt__submit(urt_emulator_t *e, const urt_ctrl_cmd_t *cmd) {
-  if (!urt_loop_submit(e->loop, e->producer, cmd)) {
+void urt__submit(urt_emulator_t *e, ring_kind_t ring, const urt_ctrl_cmd_t *cmd) {
+  if (!urt_loop_submit(e->loop, e->ring[ring], cmd)) {
     urt__script_broadcast_text(e, "urtwin: controller command dropped: command ring full");
   }
 }
 
-void urt__submit_kind(urt_emulator_t *e, int kind) {
+void urt__submit_kind(urt_emulator_t *e, ring_kind_t ring, int kind) {
   urt_ctrl_cmd_t cmd = {.kind = kind};
-  urt__submit(e, &cmd);
+  urt__submit(e, ring, &cmd);
 }
 
 //---- ticks ----
@@ -426,9 +426,14 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
     urt_emulator_destroy(e);
     return URT_EINVAL;
   }
-  e->producer = urt_loop_add_producer(loop, "tcp");
+  static const char *const kRingName[URT__N_RINGS] = {"primary", "rtde", "dashboard"};
+  bool rings_ok = true;
+  for (int r = 0; r < URT__N_RINGS; r++) {
+    e->ring[r] = urt_loop_add_producer(loop, kRingName[r]);
+    rings_ok = rings_ok && e->ring[r] >= 0;
+  }
   e->runner_producer = urt_loop_add_producer(loop, "urscript");
-  if (e->producer < 0 || e->runner_producer < 0) {
+  if (!rings_ok || e->runner_producer < 0) {
     snprintf(err, err_sz, "no free command ring for the TCP servers");
     urt_emulator_destroy(e);
     return URT_ENOSPC;

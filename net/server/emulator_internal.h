@@ -35,6 +35,17 @@ typedef enum port_kind {
 
 #define MSG_QUEUE 256   /* robot messages waiting for the I/O thread */
 
+/* The I/O thread's command rings into the physics thread, one per kind of client, so that a
+ * flood on one (RTDE inputs at 10 kHz) never costs another its commands (a dashboard `power
+ * off`, a primary `unlock protective stop`): each ring is drained in turn and counts its own
+ * drops (urt_loop_producer_dropped). */
+typedef enum ring_kind {
+  URT__RING_SCRIPT = 0,   /* 30001–30003 primary commands */
+  URT__RING_RTDE,         /* 30004 inputs                 */
+  URT__RING_DASHBOARD,    /* 29999                        */
+  URT__N_RINGS
+} ring_kind_t;
+
 typedef struct urt__client {
   urt_tcp_conn_t *conn;
   void *proto;               /* the port's per-connection state */
@@ -46,7 +57,8 @@ struct urt_emulator {
   const urt_model_t *m;
   urt_emulator_config_t cfg;
   char bind[64], programs_dir[1024];
-  int producer;                  /* the I/O thread's command ring */
+  int ring[URT__N_RINGS];        /* the I/O thread's command rings, one per kind of client */
+  uint64_t rtde_applied_tick;    /* tick of the last RTDE inputs handed to the controller */
   urt_runner_t *runner;
   int runner_producer;           /* the runner thread's command ring */
 
@@ -139,9 +151,10 @@ void urt__script_broadcast_text(urt_emulator_t *e, const char *text);
  * reg_lock and the message queue. */
 urt_script_host_t urt__script_host(urt_emulator_t *e);
 
-/* A command from the I/O thread into the controller; a full ring is reported as text. */
-void urt__submit(urt_emulator_t *e, const urt_ctrl_cmd_t *cmd);
-void urt__submit_kind(urt_emulator_t *e, int kind);
+/* A command from the I/O thread into the controller through one of its rings; a full ring is
+ * counted for that ring and reported as text. */
+void urt__submit(urt_emulator_t *e, ring_kind_t ring, const urt_ctrl_cmd_t *cmd);
+void urt__submit_kind(urt_emulator_t *e, ring_kind_t ring, int kind);
 
 /* Send one message to every client of the ports for which want(kind) is true. */
 void urt__send_to(urt_emulator_t *e, bool (*want)(int kind), const uint8_t *buf, size_t len,

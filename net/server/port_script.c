@@ -134,7 +134,7 @@ static void unlock_protective_stop(urt_emulator_t *e) {
                                   "Always inspect cause of protective stop before unlocking");
     return;
   }
-  urt__submit_kind(e, URT_CTRL_UNLOCK_PSTOP);
+  urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_UNLOCK_PSTOP);
 }
 
 // One framed unit from a client: a controller command line, a program or a statement.
@@ -144,9 +144,9 @@ static void on_unit(void *ctx, const urt_script_unit_t *u) {
   switch (u->kind) {
     case URT_SCRIPT_UNIT_COMMAND:
       switch (u->command) {
-        case URT_SCRIPT_CMD_POWER_ON: urt__submit_kind(e, URT_CTRL_POWER_ON); break;
-        case URT_SCRIPT_CMD_POWER_OFF: urt__submit_kind(e, URT_CTRL_POWER_OFF); break;
-        case URT_SCRIPT_CMD_BRAKE_RELEASE: urt__submit_kind(e, URT_CTRL_BRAKE_RELEASE); break;
+        case URT_SCRIPT_CMD_POWER_ON: urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_POWER_ON); break;
+        case URT_SCRIPT_CMD_POWER_OFF: urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_POWER_OFF); break;
+        case URT_SCRIPT_CMD_BRAKE_RELEASE: urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_BRAKE_RELEASE); break;
         case URT_SCRIPT_CMD_UNLOCK_PSTOP: unlock_protective_stop(e); break;
         case URT_SCRIPT_CMD_STOP_PROGRAM: urt_runner_stop(e->runner); break;
         default: break;  // set sim / set real: urtwin is always a simulation
