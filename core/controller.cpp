@@ -30,6 +30,8 @@
 //   to 1), so movej/movel (and a movej waiting behind a stop) slow down along their path, hold,
 //   and continue; streamed motions (servoj/l/c, speedj/l, direct, torque, freedrive, force) stop
 //   as with HALT. PROGRAM_STATE STOPPED clears the pause and stops what it held.
+// - DIRECT (LCM, DDS) set-points further from the current set-point than qd_max · period are a
+//   protective stop (URT_CTRL_FAULT_JUMP), not a step the interpolation would clamp.
 // - SET_WRENCH writes d->wrench_ext (each force ≤ 1000 N, torque ≤ 200 N m, finite).
 // - SET_GRAVITY changes the controller's model only (feed-forward, freedrive and torque-mode
 //   gravity), as set_gravity does on a real controller; the world's gravity is the model's
@@ -186,6 +188,13 @@ void apply_motion(const MotionEnv& e, const Motion& type, const urt_ctrl_cmd_t* 
   if (uint32_t bad_target = type.bad_target(m, *cmd)) {
     mark_done(c, cmd->id);
     protective_stop(c, d, URT_CTRL_FAULT_BAD_TARGET, bad_target);
+    return;
+  }
+  // an external set-point the joints cannot reach within the period is a protective stop where
+  // the arm is, not a step the set-point interpolation would clamp to qd_max in silence
+  if (kind == URT_CTRL_DIRECT && direct_jump_joints(m, c, *cmd)) {
+    mark_done(c, cmd->id);
+    protective_stop(c, d, URT_CTRL_FAULT_BAD_TARGET | URT_CTRL_FAULT_JUMP, URT_PSTOP_SPEED_LIMIT);
     return;
   }
   double qg[URT_NJ];

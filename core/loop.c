@@ -280,6 +280,22 @@ void urt_loop_set_notify_fd(urt_loop_t *l, int eventfd) {
   }
 }
 
+int urt_loop_producer_count(const urt_loop_t *l) {
+  return atomic_load_explicit(&l->n_producers, memory_order_acquire);
+}
+
+const char *urt_loop_producer_name(const urt_loop_t *l, int producer) {
+  return producer >= 0 && producer < urt_loop_producer_count(l) ? l->producer_name[producer]
+                                                                 : NULL;
+}
+
+uint64_t urt_loop_producer_dropped(const urt_loop_t *l, int producer) {
+  if (producer < 0 || producer >= urt_loop_producer_count(l)) {
+    return 0;
+  }
+  return atomic_load_explicit(&l->ring[producer].dropped, memory_order_relaxed);
+}
+
 void urt_loop_grant(urt_loop_t *l, uint64_t n) {
   atomic_fetch_add(&l->granted, n);
   atomic_fetch_add(&l->grant_word, 1);
@@ -317,12 +333,22 @@ static void rt_setup(const urt_loop_config_t *cfg) {
   urt_thread_set_fifo(pthread_self(), cfg->rt_priority, "physics thread");
 }
 
+// Round robin, one command per ring per pass, so that a flooded ring does not go before the
+// others' commands; bounded: at most what the rings held when the pass began plus what
+// producers push meanwhile, never more than URT_LOOP_RING_CAPACITY passes.
 static void drain_commands(urt_loop_t *l) {
   int n = atomic_load_explicit(&l->n_producers, memory_order_acquire);
   urt_ctrl_cmd_t cmd;
-  for (int i = 0; i < n; i++) {
-    while (urt_spsc_ring_try_pop(&l->ring[i], &cmd)) {
-      urt_ctrl_apply(l->m, &l->c, &l->d, &cmd);
+  for (int pass = 0; pass < URT_LOOP_RING_CAPACITY; pass++) {
+    bool any = false;
+    for (int i = 0; i < n; i++) {
+      if (urt_spsc_ring_try_pop(&l->ring[i], &cmd)) {
+        urt_ctrl_apply(l->m, &l->c, &l->d, &cmd);
+        any = true;
+      }
+    }
+    if (!any) {
+      break;
     }
   }
 }

@@ -103,6 +103,11 @@ void stop_on_path(const MotionEnv& e, StopCause why) noexcept;    // PAUSE: keep
 void force_begin(const MotionEnv& e) noexcept;
 void force_take_speed(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) noexcept;
 
+// an external set-point's jump (motion_direct.cpp): the joints (bits 0–5) whose commanded q is
+// further from the current set-point c->q1 than qd_max moves them in one period
+uint32_t direct_jump_joints(const urt_model_t* m, const urt_ctrl_t* c,
+                            const urt_ctrl_cmd_t& cmd) noexcept;
+
 // the controller's checks (controller.cpp)
 uint32_t speed_faults(const urt_model_t* m, const double* qd) noexcept;
 uint32_t torque_faults(const urt_model_t* m, const double* tau) noexcept;

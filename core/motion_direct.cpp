@@ -2,6 +2,8 @@
 // core/motion_direct.cpp — external joint set-points (the LCM command channel): the set-point is
 // the command's q, q̇ (q̈ their change over the period), with its torque feed-forward; each
 // command is done in the period it is applied. Context: RT.
+#include <cmath>
+
 #include "motion.hpp"
 
 namespace urt::core {
@@ -36,6 +38,19 @@ uint32_t tick(const MotionEnv& e) {
 }
 
 }  // namespace
+
+uint32_t direct_jump_joints(const urt_model_t* m, const urt_ctrl_t* c,
+                            const urt_ctrl_cmd_t& cmd) noexcept {
+  uint32_t bad = 0;
+  for (int j = 0; j < URT_NJ; j++) {
+    // the set-point interpolation would have to exceed qd_max: a real controller stops there
+    // rather than follow a step it cannot make (the 1e-9 absorbs rounding at the limit)
+    if (std::fabs(cmd.q[j] - c->q1[j]) > m->joint[j].qd_max * c->period * (1.0 + 1e-9)) {
+      bad |= 1u << j;
+    }
+  }
+  return bad;
+}
 
 const Motion kDirectMotion = {URT_MOTION_DIRECT, false, false,        false,  no_bad_argument,
                               bad_target,        start, tick, stop_to_rest, nullptr};

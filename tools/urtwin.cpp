@@ -63,7 +63,29 @@ struct Options {
   std::string external_control_host = "127.0.0.1:50002";  // the URCap's host IP and port
   double stats_every = 10.0;    // seconds between loop statistics lines (0: never)
   std::vector<std::string> script_allow_hosts;
+  int max_clients = URT_EMULATOR_MAX_CLIENTS;
+  double out_budget_mib = URT_EMULATOR_OUT_BUDGET / 1048576.0;
 };
+
+// One line: the commands each ring could not take, by producer ("rtde 12, dashboard 0, …").
+void print_ring_drops(const urt_loop_t* loop) {
+  std::string line;
+  for (int i = 0; i < urt_loop_producer_count(loop); i++) {
+    line += (i ? ", " : "") + std::string(urt_loop_producer_name(loop, i)) + " " +
+            std::to_string(urt_loop_producer_dropped(loop, i));
+  }
+  std::fprintf(stderr, "urtwin: commands dropped per ring: %s\n", line.c_str());
+}
+
+// Raise the soft descriptor limit to the hard one: the caps, not a distribution's default of
+// 1024, should be what refuses clients (8 ports at the cap hold 256). Best effort.
+void raise_nofile_limit() {
+  struct rlimit rl;
+  if (getrlimit(RLIMIT_NOFILE, &rl) == 0 && rl.rlim_cur < rl.rlim_max) {
+    rl.rlim_cur = rl.rlim_max;
+    setrlimit(RLIMIT_NOFILE, &rl);
+  }
+}
 
 // "127.0.0.1:50002" → host, port (1…65535).
 int parse_host_port(const std::string& text, std::string* host, int* port) {
@@ -218,6 +240,15 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--stats-every", o.stats_every, "seconds between loop statistics lines (0: never)")
       ->capture_default_str();
+  app.add_option("--max-clients", o.max_clients,
+                 "clients at once on each port; one more is accepted and closed at once")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  app.add_option("--out-budget-mib", o.out_budget_mib,
+                 "output buffers all clients together may hold [MiB]; beyond it messages are "
+                 "dropped for the clients that do not read")
+      ->check(CLI::Range(1.0, 4096.0))
+      ->capture_default_str();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -310,6 +341,9 @@ int main(int argc, char** argv) {
   ec.external_control_host = ec_host.c_str();
   ec.external_control_port = ec_port;
   ec.rt_priority = o.rt_priority > 1 ? o.rt_priority - 1 : 0;  // just below the physics
+  ec.max_clients = o.max_clients;
+  ec.out_budget = static_cast<size_t>(o.out_budget_mib * 1048576.0);
+  raise_nofile_limit();
   std::vector<const char*> allow_hosts;
   for (const auto& h : o.script_allow_hosts) {
     allow_hosts.push_back(h.c_str());
@@ -396,6 +430,15 @@ int main(int argc, char** argv) {
                    (unsigned long long)s.ticks, (unsigned long long)s.overruns,
                    (unsigned long long)s.missed_periods, (unsigned long long)s.cmd_dropped,
                    s.exec_last * 1e6, s.exec_max * 1e6, resident_kib());
+      urt_emulator_stats_t es;
+      urt_emulator_get_stats(emu, &es);
+      std::fprintf(stderr,
+                   "urtwin: clients %llu, refused at the cap %llu, refused for descriptors %llu, "
+                   "output buffers %llu KiB (%llu growths refused)\n",
+                   (unsigned long long)es.clients, (unsigned long long)es.refused_cap,
+                   (unsigned long long)es.refused_fds, (unsigned long long)(es.out_bytes / 1024),
+                   (unsigned long long)es.out_refused);
+      print_ring_drops(loop);
       if (dds) {
         print_dds_stats(dds);
       }
@@ -416,6 +459,7 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",
                (unsigned long long)s.ticks, (unsigned long long)s.overruns,
                (unsigned long long)s.missed_periods);
+  print_ring_drops(loop);
   urt_dds_bridge_destroy(dds);
   urt_lcm_bridge_destroy(bridge);
   urt_emulator_destroy(emu);

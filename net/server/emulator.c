@@ -16,6 +16,7 @@
 #include <string.h>
 #include <sys/epoll.h>
 #include <sys/eventfd.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "emulator_internal.h"
@@ -35,6 +36,9 @@ static const int kBasePort[URT__N_PORTS] = {30001, 30002, 30003, 30011, 30012, 3
 #define READ_CHUNK 65536
 #define MAX_EVENTS 64
 #define THREAD_STACK (512 * 1024)
+#define ACCEPTS_PER_EVENT 64
+#define LISTEN_BACKOFF_NS 100000000LL  /* 100 ms without a spare descriptor */
+#define REFUSAL_LOG_NS 1000000000LL
 
 /* epoll user data: listeners and the two eventfds are tagged small integers; connections are
  * pointers (always > 4096). */
@@ -72,15 +76,15 @@ void urt__send_to(urt_emulator_t *e, bool (*want)(int kind), const uint8_t *buf,
   }
 }
 
-void urt__submit(urt_emulator_t *e, const urt_ctrl_cmd_t *cmd) {
-  if (!urt_loop_submit(e->loop, e->producer, cmd)) {
+void urt__submit(urt_emulator_t *e, ring_kind_t ring, const urt_ctrl_cmd_t *cmd) {
+  if (!urt_loop_submit(e->loop, e->ring[ring], cmd)) {
     urt__script_broadcast_text(e, "urtwin: controller command dropped: command ring full");
   }
 }
 
-void urt__submit_kind(urt_emulator_t *e, int kind) {
+void urt__submit_kind(urt_emulator_t *e, ring_kind_t ring, int kind) {
   urt_ctrl_cmd_t cmd = {.kind = kind};
-  urt__submit(e, &cmd);
+  urt__submit(e, ring, &cmd);
 }
 
 //---- ticks ----
@@ -135,18 +139,92 @@ static void close_client(urt_emulator_t *e, urt__client_t *c) {
   if (ops->close) {
     ops->close(e, c);
   }
+  e->port_clients[c->conn->port_kind]--;
   urt_tcp_close(c->conn);
   free(c);
   atomic_fetch_sub(&e->n_clients, 1);
 }
 
+static int64_t mono_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+// Refusals are logged at most once a second, as counts: a flood must not become a log flood.
+static void log_refusals(urt_emulator_t *e, bool force) {
+  int64_t now = mono_ns();
+  if (!force && now - e->last_refusal_log_ns < REFUSAL_LOG_NS) {
+    return;
+  }
+  for (int k = 0; k < URT__N_PORTS; k++) {
+    if (e->unlogged_cap[k]) {
+      fprintf(stderr, "urtwin: port %d: %llu connection(s) refused, %d clients already (the cap, "
+              "--max-clients)\n", kBasePort[k] + e->cfg.port_offset,
+              (unsigned long long)e->unlogged_cap[k], e->max_clients);
+      e->unlogged_cap[k] = 0;
+    }
+  }
+  if (e->unlogged_fds) {
+    fprintf(stderr, "urtwin: %llu connection(s) refused: no file descriptor left (EMFILE/ENFILE; "
+            "raise `ulimit -n` or lower --max-clients)\n", (unsigned long long)e->unlogged_fds);
+    e->unlogged_fds = 0;
+  }
+  e->last_refusal_log_ns = now;
+}
+
+static void listener_events(urt_emulator_t *e, int kind, uint32_t events) {
+  struct epoll_event ev = {.events = events, .data.ptr = (void *)(uintptr_t)(TAG_LISTEN0 + kind)};
+  epoll_ctl(e->epoll_fd, EPOLL_CTL_MOD, e->listen_fd[kind], &ev);
+}
+
+// Listeners paused for lack of descriptors listen again once their back-off is over.
+static void resume_listeners(urt_emulator_t *e) {
+  int64_t now = mono_ns();
+  for (int k = 0; k < URT__N_PORTS; k++) {
+    if (e->listen_paused_until_ns[k] && now >= e->listen_paused_until_ns[k]) {
+      e->listen_paused_until_ns[k] = 0;
+      if (e->reserve_fd < 0) {
+        e->reserve_fd = urt_tcp_reserve_open();
+      }
+      listener_events(e, k, EPOLLIN);
+    }
+  }
+}
+
 static void on_accept(urt_emulator_t *e, int kind) {
-  for (;;) {
-    urt_tcp_conn_t *conn = urt_tcp_accept(e->listen_fd[kind], kind,
-                                          kind == PORT_RT || kind == PORT_RT_RO ? RT_OUT_CAP
-                                                                                : STATE_OUT_CAP);
-    if (!conn) {
+  // bounded per event (the listener is level-triggered: the rest comes next round)
+  for (int n = 0; n < ACCEPTS_PER_EVENT; n++) {
+    int fd = urt_tcp_accept_fd(e->listen_fd[kind], &e->reserve_fd);
+    if (fd == URT_TCP_NONE) {
       return;
+    }
+    if (fd == URT_TCP_FAILED) {
+      continue;
+    }
+    if (fd == URT_TCP_NO_FDS || fd == URT_TCP_NO_FDS_STUCK) {
+      atomic_fetch_add(&e->refused_fds, 1);
+      e->unlogged_fds++;
+      if (fd == URT_TCP_NO_FDS_STUCK) {
+        // not even a spare: stop listening for a while instead of waking on it in a loop
+        e->listen_paused_until_ns[kind] = mono_ns() + LISTEN_BACKOFF_NS;
+        listener_events(e, kind, 0);
+        return;
+      }
+      continue;
+    }
+    if (e->port_clients[kind] >= e->max_clients) {
+      close(fd);  // at the cap: an orderly close, the peer reads EOF
+      atomic_fetch_add(&e->refused_cap, 1);
+      e->unlogged_cap[kind]++;
+      continue;
+    }
+    urt_tcp_conn_t *conn = urt_tcp_conn_new(
+        fd, kind, kind == PORT_RT || kind == PORT_RT_RO ? RT_OUT_CAP : STATE_OUT_CAP,
+        &e->out_budget);
+    if (!conn) {
+      close(fd);
+      continue;
     }
     urt__client_t *c = calloc(1, sizeof *c);
     const urt__port_ops_t *ops = ops_of(kind);
@@ -168,6 +246,7 @@ static void on_accept(urt_emulator_t *e, int kind) {
     }
     c->next = e->clients;
     e->clients = c;
+    e->port_clients[kind]++;
     atomic_fetch_add(&e->n_clients, 1);
   }
 }
@@ -207,7 +286,9 @@ static void flush_all(urt_emulator_t *e) {
       close_client(e, c);  // stopped reading: dropped after a bound, never waited for
       continue;
     }
-    if (urt_tcp_pending(c->conn) > 0 && !urt_tcp_flush(c->conn)) {
+    // a client whose socket was full is written again only once epoll says it has room: a
+    // crowd of clients that never read costs no system call per tick
+    if (urt_tcp_pending(c->conn) > 0 && !c->conn->write_blocked && !urt_tcp_flush(c->conn)) {
       close_client(e, c);
       continue;
     }
@@ -246,6 +327,7 @@ static void *io_main(void *arg) {
   urt_emulator_t *e = arg;
   // just below the physics thread: the streams' jitter is the I/O thread's wake-up latency
   urt_thread_set_fifo(pthread_self(), e->cfg.rt_priority, "I/O thread");
+  pthread_setname_np(pthread_self(), "urt-io");  // so that its CPU time can be told apart
   struct epoll_event ev[MAX_EVENTS];
   while (!atomic_load(&e->stop)) {
     int n = epoll_wait(e->epoll_fd, ev, MAX_EVENTS, 50);
@@ -260,13 +342,23 @@ static void *io_main(void *arg) {
         drain_messages(e);
       } else if (tag >= TAG_LISTEN0 && tag < TAG_LISTEN0 + URT__N_PORTS) {
         on_accept(e, (int)(tag - TAG_LISTEN0));
-      } else if (ev[i].events & (EPOLLIN | EPOLLRDHUP | EPOLLHUP | EPOLLERR)) {
-        on_readable(e, ev[i].data.ptr);  // may close the client
+      } else {
+        urt__client_t *c = ev[i].data.ptr;
+        if (ev[i].events & (EPOLLOUT | EPOLLHUP | EPOLLERR)) {
+          c->conn->write_blocked = false;  // room again: flush_all below writes what is queued
+        }
+        if (ev[i].events & (EPOLLIN | EPOLLRDHUP | EPOLLHUP | EPOLLERR)) {
+          on_readable(e, c);  // may close the client
+        }
       }
-      // EPOLLOUT alone: flush_all below writes what is queued
     }
     flush_all(e);
+    resume_listeners(e);
+    log_refusals(e, false);
+    atomic_store_explicit(&e->out_bytes, e->out_budget.used, memory_order_relaxed);
+    atomic_store_explicit(&e->out_refused, e->out_budget.refused, memory_order_relaxed);
   }
+  log_refusals(e, true);
   return NULL;
 }
 
@@ -289,6 +381,9 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   snprintf(e->bind, sizeof e->bind, "%s", cfg->bind ? cfg->bind : "127.0.0.1");
   e->cfg.bind = e->bind;
   e->epoll_fd = e->tick_fd = e->msg_fd = -1;
+  e->max_clients = cfg->max_clients > 0 ? cfg->max_clients : URT_EMULATOR_MAX_CLIENTS;
+  e->out_budget.limit = cfg->out_budget > 0 ? cfg->out_budget : URT_EMULATOR_OUT_BUDGET;
+  e->reserve_fd = urt_tcp_reserve_open();
   e->pstop_since = -1.0;
   e->last_safety_mode = -1;
   for (int k = 0; k < URT__N_PORTS; k++) {
@@ -331,9 +426,14 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
     urt_emulator_destroy(e);
     return URT_EINVAL;
   }
-  e->producer = urt_loop_add_producer(loop, "tcp");
+  static const char *const kRingName[URT__N_RINGS] = {"primary", "rtde", "dashboard"};
+  bool rings_ok = true;
+  for (int r = 0; r < URT__N_RINGS; r++) {
+    e->ring[r] = urt_loop_add_producer(loop, kRingName[r]);
+    rings_ok = rings_ok && e->ring[r] >= 0;
+  }
   e->runner_producer = urt_loop_add_producer(loop, "urscript");
-  if (e->producer < 0 || e->runner_producer < 0) {
+  if (!rings_ok || e->runner_producer < 0) {
     snprintf(err, err_sz, "no free command ring for the TCP servers");
     urt_emulator_destroy(e);
     return URT_ENOSPC;
@@ -416,6 +516,7 @@ void urt_emulator_destroy(urt_emulator_t *e) {
       close(e->listen_fd[k]);
     }
   }
+  if (e->reserve_fd >= 0) close(e->reserve_fd);
   if (e->epoll_fd >= 0) close(e->epoll_fd);
   if (e->tick_fd >= 0) close(e->tick_fd);
   if (e->msg_fd >= 0) close(e->msg_fd);
@@ -432,6 +533,10 @@ void urt_emulator_get_stats(const urt_emulator_t *e, urt_emulator_stats_t *out) 
   out->state_messages = atomic_load(&e->state_messages);
   out->ticks_lost = atomic_load(&e->ticks_lost);
   out->scripts = atomic_load(&e->scripts);
+  out->refused_cap = atomic_load(&e->refused_cap);
+  out->refused_fds = atomic_load(&e->refused_fds);
+  out->out_bytes = atomic_load(&e->out_bytes);
+  out->out_refused = atomic_load(&e->out_refused);
 }
 
 int urt_emulator_shutdown_requested(const urt_emulator_t *e) {

@@ -35,6 +35,17 @@ typedef enum port_kind {
 
 #define MSG_QUEUE 256   /* robot messages waiting for the I/O thread */
 
+/* The I/O thread's command rings into the physics thread, one per kind of client, so that a
+ * flood on one (RTDE inputs at 10 kHz) never costs another its commands (a dashboard `power
+ * off`, a primary `unlock protective stop`): each ring is drained in turn and counts its own
+ * drops (urt_loop_producer_dropped). */
+typedef enum ring_kind {
+  URT__RING_SCRIPT = 0,   /* 30001–30003 primary commands */
+  URT__RING_RTDE,         /* 30004 inputs                 */
+  URT__RING_DASHBOARD,    /* 29999                        */
+  URT__N_RINGS
+} ring_kind_t;
+
 typedef struct urt__client {
   urt_tcp_conn_t *conn;
   void *proto;               /* the port's per-connection state */
@@ -46,13 +57,25 @@ struct urt_emulator {
   const urt_model_t *m;
   urt_emulator_config_t cfg;
   char bind[64], programs_dir[1024];
-  int producer;                  /* the I/O thread's command ring */
+  int ring[URT__N_RINGS];        /* the I/O thread's command rings, one per kind of client */
+  uint64_t rtde_applied_tick;    /* tick of the last RTDE inputs handed to the controller */
   urt_runner_t *runner;
   int runner_producer;           /* the runner thread's command ring */
 
   int listen_fd[URT__N_PORTS];
   int epoll_fd, tick_fd, msg_fd;
   urt__client_t *clients;
+
+  /* connection caps (emulator.c): clients per port, the spare descriptor that drains a
+   * listener when the table is full, listeners paused when even that failed, what every
+   * client's output may hold together, and the refusals not yet logged */
+  int max_clients;
+  int port_clients[URT__N_PORTS];
+  int reserve_fd;
+  int64_t listen_paused_until_ns[URT__N_PORTS];  /* 0: listening */
+  urt_tcp_budget_t out_budget;
+  uint64_t unlogged_cap[URT__N_PORTS], unlogged_fds;
+  int64_t last_refusal_log_ns;
   uint64_t streamed_tick;        /* last tick handed to the ports */
 
   /* 30001–30003 */
@@ -94,7 +117,7 @@ struct urt_emulator {
   int started;
 
   _Atomic uint64_t n_clients, rt_packets, rt_dropped, state_messages, ticks_lost, scripts,
-      rtde_packages, rtde_dropped;
+      rtde_packages, rtde_dropped, refused_cap, refused_fds, out_bytes, out_refused;
 };
 
 /* Hooks of one kind of port. Nullable: every hook. */
@@ -128,9 +151,10 @@ void urt__script_broadcast_text(urt_emulator_t *e, const char *text);
  * reg_lock and the message queue. */
 urt_script_host_t urt__script_host(urt_emulator_t *e);
 
-/* A command from the I/O thread into the controller; a full ring is reported as text. */
-void urt__submit(urt_emulator_t *e, const urt_ctrl_cmd_t *cmd);
-void urt__submit_kind(urt_emulator_t *e, int kind);
+/* A command from the I/O thread into the controller through one of its rings; a full ring is
+ * counted for that ring and reported as text. */
+void urt__submit(urt_emulator_t *e, ring_kind_t ring, const urt_ctrl_cmd_t *cmd);
+void urt__submit_kind(urt_emulator_t *e, ring_kind_t ring, int kind);
 
 /* Send one message to every client of the ports for which want(kind) is true. */
 void urt__send_to(urt_emulator_t *e, bool (*want)(int kind), const uint8_t *buf, size_t len,

@@ -19,23 +19,23 @@ static void perform(urt_emulator_t *e, urt__client_t *c, const urt_dashboard_act
     case URT_DASHBOARD_PROG_STOP:
       urt__program_cancel(e);  // first: an External Control fetch must not submit after this
       urt_runner_stop(e->runner);
-      urt__submit_kind(e, URT_CTRL_RESUME);  // a stopped program is no longer paused
+      urt__submit_kind(e, URT__RING_DASHBOARD, URT_CTRL_RESUME);  // a stopped program is no longer paused
       break;
     case URT_DASHBOARD_PROG_PLAY:
       if (robot->program_state == URT_PROGRAM_PAUSED) {
-        urt__submit_kind(e, URT_CTRL_RESUME);
+        urt__submit_kind(e, URT__RING_DASHBOARD, URT_CTRL_RESUME);
       } else {
         urt__program_play(e);
       }
       break;
     case URT_DASHBOARD_PROG_PAUSE:
-      urt__submit_kind(e, URT_CTRL_PAUSE);
+      urt__submit_kind(e, URT__RING_DASHBOARD, URT_CTRL_PAUSE);
       break;
     default:
       break;
   }
   for (int i = 0; i < a->n_ctrl; i++) {
-    urt__submit_kind(e, a->ctrl[i]);
+    urt__submit_kind(e, URT__RING_DASHBOARD, a->ctrl[i]);
   }
   if (a->log_text) {
     char text[512];

@@ -52,8 +52,13 @@ static bool rtde_input(urt_emulator_t *e, urt__client_t *c, const uint8_t *data,
       return false;  // replies are stuck: the client is not reading them
     }
   }
-  // inputs go to the controller now, not at the next tick: one period less of latency
-  urt__rtde_apply_inputs(e);
+  // the first inputs of a period go to the controller now, not at the next tick (one period
+  // less of latency); later ones in the same period wait in the session, merged newest-wins,
+  // for the tick (a controller reads its inputs once a cycle): a client sending at 10 kHz
+  // costs the ring one set of commands per period, not twenty
+  if (urt_loop_latest_tick(e->loop) > e->rtde_applied_tick) {
+    urt__rtde_apply_inputs(e);
+  }
   return true;
 }
 
@@ -76,7 +81,7 @@ static void submit_outputs(urt_emulator_t *e, int first, uint8_t mask, uint8_t v
     if (mask >> b & 1) {
       urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_DIGITAL_OUT, .index = first + b,
                             .value = (double)(values >> b & 1)};
-      urt__submit(e, &cmd);
+      urt__submit(e, URT__RING_RTDE, &cmd);
     }
   }
 }
@@ -101,18 +106,19 @@ void urt__rtde_apply_inputs(urt_emulator_t *e) {
   if (!any) {
     return;
   }
+  e->rtde_applied_tick = urt_loop_latest_tick(e->loop);
   pthread_mutex_lock(&e->reg_lock);
   urt_rtde_inputs_apply_registers(&all, &e->regs);
   pthread_mutex_unlock(&e->reg_lock);
   if (all.set & URT_RTDE_IN_SPEED_SLIDER) {
     urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_SPEED_SLIDER, .value = all.speed_slider_fraction};
-    urt__submit(e, &cmd);
+    urt__submit(e, URT__RING_RTDE, &cmd);
   }
   if (all.set & URT_RTDE_IN_EXT_FT) {
     // the virtual world pushes the tool with this wrench (it is what the physics feels)
     urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_WRENCH};
     memcpy(cmd.pose, all.external_force_torque, sizeof cmd.pose);
-    urt__submit(e, &cmd);
+    urt__submit(e, URT__RING_RTDE, &cmd);
   }
   submit_outputs(e, 0, all.std_do_mask, all.std_do);
   submit_outputs(e, 8, all.conf_do_mask, all.conf_do);
@@ -120,7 +126,7 @@ void urt__rtde_apply_inputs(urt_emulator_t *e) {
   for (int i = 0; i < 2; i++) {
     if (all.ao_mask >> i & 1) {
       urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_ANALOG_OUT, .index = i, .value = all.ao[i]};
-      urt__submit(e, &cmd);
+      urt__submit(e, URT__RING_RTDE, &cmd);
     }
   }
 }

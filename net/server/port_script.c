@@ -64,6 +64,11 @@ void urt__script_broadcast_text(urt_emulator_t *e, const char *text) {
  * one SAFETY_MODE message per change (URCL's getSafetyMode() comes only from it, so none is
  * sent before the first change), and, for a protective stop a program asked for, one
  * ERROR_CODE C209A0 "A protective stop was triggered" at WARNING level (UR's error code 209).
+ * An external set-point (LCM, DDS) that jumps further than its joint moves in one period gets
+ * ERROR_CODE C204A0 "Protective Stop: Invalid setpoints: Position jump" at VIOLATION level:
+ * 204 is UR's "Invalid setpoints" family (a UR3 on 3.3 reported "C204A3: Protective Stop:
+ * Invalid setpoints: Sudden stop" for a trajectory beyond its limits, ur_modern_driver issue
+ * 13); the argument 0, the words after the family's and the level are urtwin's, unconfirmed.
  * Stops with other causes (limits, the physics) get the SAFETY_MODE message only: urtwin does
  * not model UR's error codes for them. Code, argument and report data of SAFETY_MODE are 0:
  * their values on a real controller are not documented. Called before the tick's robot state,
@@ -86,6 +91,15 @@ void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
     n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 209, 0,
                                       URT_PRIMARY_REPORT_WARNING, 0, 0,
                                       "A protective stop was triggered", buf, sizeof buf);
+    if (n > 0) {
+      urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
+    }
+  }
+  if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP && (s->ctrl_fault & URT_CTRL_FAULT_JUMP)) {
+    n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 204, 0,
+                                      URT_PRIMARY_REPORT_VIOLATION, 0, 0,
+                                      "Protective Stop: Invalid setpoints: Position jump", buf,
+                                      sizeof buf);
     if (n > 0) {
       urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
     }
@@ -120,7 +134,7 @@ static void unlock_protective_stop(urt_emulator_t *e) {
                                   "Always inspect cause of protective stop before unlocking");
     return;
   }
-  urt__submit_kind(e, URT_CTRL_UNLOCK_PSTOP);
+  urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_UNLOCK_PSTOP);
 }
 
 // One framed unit from a client: a controller command line, a program or a statement.
@@ -130,9 +144,9 @@ static void on_unit(void *ctx, const urt_script_unit_t *u) {
   switch (u->kind) {
     case URT_SCRIPT_UNIT_COMMAND:
       switch (u->command) {
-        case URT_SCRIPT_CMD_POWER_ON: urt__submit_kind(e, URT_CTRL_POWER_ON); break;
-        case URT_SCRIPT_CMD_POWER_OFF: urt__submit_kind(e, URT_CTRL_POWER_OFF); break;
-        case URT_SCRIPT_CMD_BRAKE_RELEASE: urt__submit_kind(e, URT_CTRL_BRAKE_RELEASE); break;
+        case URT_SCRIPT_CMD_POWER_ON: urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_POWER_ON); break;
+        case URT_SCRIPT_CMD_POWER_OFF: urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_POWER_OFF); break;
+        case URT_SCRIPT_CMD_BRAKE_RELEASE: urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_BRAKE_RELEASE); break;
         case URT_SCRIPT_CMD_UNLOCK_PSTOP: unlock_protective_stop(e); break;
         case URT_SCRIPT_CMD_STOP_PROGRAM: urt_runner_stop(e->runner); break;
         default: break;  // set sim / set real: urtwin is always a simulation

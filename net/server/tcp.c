@@ -1,10 +1,12 @@
 /* SPDX-License-Identifier: Apache-2.0
- * net/server/tcp.c — listeners and connections with bounded output (tcp.h). */
+ * net/server/tcp.c — listeners, an accept that survives a full descriptor table, and
+ * connections whose output grows on demand within bounds (tcp.h). */
 #define _GNU_SOURCE
 #include "urt/net/tcp.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <stdio.h>
@@ -37,26 +39,93 @@ int urt_tcp_listen(const char *addr, int port, char *err, size_t err_sz) {
   return fd;
 }
 
-urt_tcp_conn_t *urt_tcp_accept(int listen_fd, int port_kind, size_t out_cap) {
+int urt_tcp_reserve_open(void) { return open("/dev/null", O_RDONLY | O_CLOEXEC); }
+
+int urt_tcp_accept_fd(int listen_fd, int *reserve_fd) {
   int fd = accept4(listen_fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
-  if (fd < 0) {
-    return NULL;
+  if (fd >= 0) {
+    int one = 1;
+    setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    return fd;
   }
-  int one = 1;
-  setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+  if (errno == EAGAIN || errno == EWOULDBLOCK) {
+    return URT_TCP_NONE;
+  }
+  if (errno != EMFILE && errno != ENFILE) {
+    return URT_TCP_FAILED;
+  }
+  if (!reserve_fd || *reserve_fd < 0) {
+    return URT_TCP_NO_FDS_STUCK;
+  }
+  // the reserve trick: free one descriptor, take the connection with it, close it (the peer
+  // sees an orderly close), then hold the spare again
+  close(*reserve_fd);
+  // (Linux reserves the descriptor before it looks at the queue: EMFILE comes even when
+  // nothing is pending, which only this second accept tells)
+  fd = accept4(listen_fd, NULL, NULL, SOCK_CLOEXEC);
+  int why = errno;
+  if (fd >= 0) {
+    close(fd);
+  }
+  *reserve_fd = urt_tcp_reserve_open();
+  if (fd >= 0) {
+    return URT_TCP_NO_FDS;
+  }
+  if (why == EAGAIN || why == EWOULDBLOCK) {
+    return URT_TCP_NONE;
+  }
+  // another thread took the freed descriptor first: as if there were no reserve
+  return why == EMFILE || why == ENFILE ? URT_TCP_NO_FDS_STUCK : URT_TCP_FAILED;
+}
+
+#define OUT_INITIAL 4096  /* the first buffer; most clients never need more than a few */
+
+urt_tcp_conn_t *urt_tcp_conn_new(int fd, int port_kind, size_t out_max, urt_tcp_budget_t *budget) {
   urt_tcp_conn_t *c = calloc(1, sizeof *c);
-  uint8_t *out = malloc(out_cap);
+  size_t cap = out_max < OUT_INITIAL ? out_max : OUT_INITIAL;
+  uint8_t *out = malloc(cap);
   if (!c || !out) {
     free(c);
     free(out);
-    close(fd);
     return NULL;
   }
   c->fd = fd;
   c->port_kind = port_kind;
   c->out = out;
-  c->out_cap = out_cap;
+  c->out_cap = cap;
+  c->out_max = out_max;
+  c->budget = budget;
+  if (budget) {
+    budget->used += cap;  // always granted: a client gets at least its first buffer
+  }
   return c;
+}
+
+// Make room for len more bytes at out_len: false when the caps or the budget forbid it.
+static bool grow(urt_tcp_conn_t *c, size_t len) {
+  size_t need = c->out_len + len;
+  if (need > c->out_max) {
+    return false;
+  }
+  size_t cap = c->out_cap;
+  while (cap < need) {
+    cap = cap > c->out_max / 2 ? c->out_max : cap * 2;
+  }
+  size_t more = cap - c->out_cap;
+  if (c->budget && c->budget->used + more > c->budget->limit) {
+    c->budget->refused++;
+    return false;
+  }
+  uint8_t *out = realloc(c->out, cap);
+  if (!out) {
+    return false;
+  }
+  c->out = out;
+  c->out_cap = cap;
+  if (c->budget) {
+    c->budget->used += more;
+  }
+  return true;
 }
 
 size_t urt_tcp_pending(const urt_tcp_conn_t *c) { return c->out_len - c->out_head; }
@@ -84,6 +153,7 @@ bool urt_tcp_flush(urt_tcp_conn_t *c) {
       continue;
     }
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+      c->write_blocked = true;
       break;
     }
     if (n < 0 && errno == EINTR) {
@@ -107,7 +177,7 @@ bool urt_tcp_send(urt_tcp_conn_t *c, const void *msg, size_t len) {
     c->out_len -= c->out_head;
     c->out_head = 0;
   }
-  if (c->out_cap - c->out_len < len) {
+  if (c->out_cap - c->out_len < len && !grow(c, len)) {
     c->dropped_msgs++;
     return false;
   }
@@ -125,6 +195,9 @@ void urt_tcp_close(urt_tcp_conn_t *c) {
     return;
   }
   close(c->fd);
+  if (c->budget) {
+    c->budget->used -= c->out_cap;
+  }
   free(c->out);
   free(c);
 }

@@ -800,6 +800,52 @@ static void test_controller__set_payload_mounts_it_at_the_next_tick(void **state
   rig_period(&r, &p);
   assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
   assert_true(r.d->live.payload.mass == 3.0 && r.c->payload_mass == 3.0);
+
+// An external set-point 0.5 rad from the current one (250 rad/s over a 2 ms period) is a
+// protective stop where the arm is, flagged as a jump; a step of just under qd_max · period is
+// followed. Neither the set-point nor the arm takes the jump.
+static void test_direct__position_jump_is_a_protective_stop(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  run_for(&r, 0.05);
+  // just below the bound: followed
+  const double vmax = r.m->joint[1].qd_max;
+  urt_ctrl_cmd_t ok = cmd_of(&r, URT_CTRL_DIRECT);
+  memcpy(ok.q, r.c->q1, sizeof ok.q);
+  ok.q[1] += 0.99 * vmax * r.c->period;
+  rig_period(&r, &ok);
+  assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
+  assert_int_equal(r.c->fault & URT_CTRL_FAULT_JUMP, 0);
+  for (int k = 0; k < 50; k++) {
+    rig_period(&r, NULL);
+  }
+  double q_before[URT_NJ], sp_before[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    q_before[j] = q_act(&r, j);
+  }
+  memcpy(sp_before, r.c->q1, sizeof sp_before);
+  urt_ctrl_cmd_t jump = cmd_of(&r, URT_CTRL_DIRECT);
+  memcpy(jump.q, r.c->q1, sizeof jump.q);
+  jump.q[1] += 0.5;
+  rig_period(&r, &jump);
+  assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_PROTECTIVE_STOP);
+  assert_true(r.c->fault & URT_CTRL_FAULT_JUMP);
+  assert_true(r.c->fault & URT_CTRL_FAULT_BAD_TARGET);
+  assert_true(r.d->pstop & URT_PSTOP_SPEED_LIMIT);
+  assert_true(r.c->motion_done_id >= jump.id);
+  double max_q = 0.0, max_sp = 0.0;
+  for (int k = 0; k < 250; k++) {  // 0.5 s
+    rig_period(&r, k == 10 ? &jump : NULL);  // another one while stopped: refused
+    for (int j = 0; j < URT_NJ; j++) {
+      max_q = fmax(max_q, fabs(q_act(&r, j) - q_before[j]));
+      max_sp = fmax(max_sp, fabs(r.c->q1[j] - sp_before[j]));
+    }
+  }
+  print_message("direct jump of 0.5 rad: protective stop, arm moved %.2e rad, set-point %.2e rad\n",
+                max_q, max_sp);
+  assert_true(max_q < 1e-3);
+  assert_true(max_sp < 1e-3);
+  assert_true(urt_test_state_finite(r.d));
   rig_free(&r);
 }
 
@@ -823,6 +869,7 @@ int main(void) {
       cmocka_unit_test(test_snapshot__fields_follow_the_physics),
       cmocka_unit_test(test_direct__follows_external_setpoints),
       cmocka_unit_test(test_controller__set_payload_mounts_it_at_the_next_tick),
+      cmocka_unit_test(test_direct__position_jump_is_a_protective_stop),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

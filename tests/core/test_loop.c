@@ -172,6 +172,41 @@ static void test_loop__commands_reach_the_controller(void **state) {
   urt_loop_destroy(l);
 }
 
+// Each ring counts its own drops: a flooded ring refuses what does not fit (counted for it
+// alone), another ring's command still goes in and is applied in the same tick.
+static void test_loop__each_ring_counts_its_own_drops(void **state) {
+  (void)state;
+  urt_loop_t *l = make_loop(URT_PACING_LOCKSTEP, 0);
+  int base = urt_loop_producer_count(l);
+  int flood = urt_loop_add_producer(l, "flood"), calm = urt_loop_add_producer(l, "calm");
+  assert_int_equal(urt_loop_producer_count(l), base + 2);
+  assert_string_equal(urt_loop_producer_name(l, flood), "flood");
+  assert_string_equal(urt_loop_producer_name(l, calm), "calm");
+  assert_null(urt_loop_producer_name(l, calm + 1));
+  urt_ctrl_cmd_t a = {.kind = URT_CTRL_SET_DIGITAL_OUT, .index = 0, .value = 1};
+  int pushed = 0;
+  for (int i = 0; i < URT_LOOP_RING_CAPACITY + 10; i++) {
+    pushed += urt_loop_submit(l, flood, &a);
+  }
+  assert_int_equal(pushed, URT_LOOP_RING_CAPACITY);
+  urt_ctrl_cmd_t b = {.kind = URT_CTRL_SET_DIGITAL_OUT, .index = 5, .value = 1};
+  assert_true(urt_loop_submit(l, calm, &b));
+  assert_int_equal(urt_loop_producer_dropped(l, flood), 10);
+  assert_int_equal(urt_loop_producer_dropped(l, calm), 0);
+  assert_int_equal(urt_loop_producer_dropped(l, calm + 1), 0);
+  assert_int_equal(urt_loop_start(l), 0);
+  urt_loop_grant(l, 1);
+  assert_int_equal(urt_loop_wait(l, 0, 5000), 1);
+  urt_snapshot_t s;
+  urt_loop_read_latest(l, &s);
+  urt_loop_stop(l);
+  assert_int_equal(s.digital_out & 0x21u, 0x21u);  // both rings' commands, in tick 1
+  urt_loop_stats_t st;
+  urt_loop_get_stats(l, &st);
+  assert_int_equal(st.cmd_dropped, 10);
+  urt_loop_destroy(l);
+}
+
 // Drive samples come at their own rate: 1 kHz from a 20 kHz physics, consecutive, 1 ms apart.
 static void test_loop__drive_samples_at_their_rate(void **state) {
   (void)state;
@@ -207,6 +242,7 @@ int main(void) {
       cmocka_unit_test(test_loop__notify_fd_released_when_removed),
       cmocka_unit_test(test_loop__lockstep_runs_only_granted_ticks),
       cmocka_unit_test(test_loop__commands_reach_the_controller),
+      cmocka_unit_test(test_loop__each_ring_counts_its_own_drops),
       cmocka_unit_test(test_loop__drive_samples_at_their_rate),
   };
 #endif

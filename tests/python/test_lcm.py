@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from urtwin_proc import BUILD, Emulator, RtReader, URTWIN
+from urtwin_proc import BUILD, Emulator, PrimaryReader, RtReader, URTWIN
 
 lcm = pytest.importorskip("lcm")
 LCM_TYPES = os.path.join(BUILD, "net", "lcm", "python")
@@ -168,6 +168,51 @@ def test_lcm_command_stream_moves_the_arm():
     assert s1.safety_mode == 1 and s1.motion == 7
     assert abs(s1.q_target[0] - (s0.q_target[0] + dq)) < 1e-9
     assert abs(s1.q_actual[0] - (s0.q_actual[0] + dq)) < 0.005
+
+
+def test_lcm_position_jump_is_a_protective_stop_with_urs_message():
+    """A command 0.5 rad away from the set-point (250 rad/s over one period) stops the arm where
+    it is: safety mode PROTECTIVE_STOP on LCM, the SAFETY_MODE and ERROR_CODE C204A0 messages on
+    30001, and neither the set-point nor the arm moves; later commands are refused until unlock."""
+    url, prefix = lcm_endpoint()
+    with Emulator("--lcm", "--lcm-url", url, "--lcm-prefix", prefix) as emu:
+        ls = Listener(url, prefix)
+        s0 = ls.wait_tick(50)
+        assert s0 is not None and s0.safety_mode == 1
+        primary = PrimaryReader(emu.host)
+        messages = []
+        reader = threading.Thread(target=lambda: messages.extend(primary.robot_messages(1.5)))
+        reader.start()
+        time.sleep(0.2)
+        pub = lcm.LCM(url)
+        q = list(s0.q_target)
+        q[1] += 0.5
+        pub.publish(prefix + "_COMMAND", command(q))
+        time.sleep(0.5)
+        # after the stop, a command is refused: the arm stays
+        pub.publish(prefix + "_COMMAND", command(q))
+        time.sleep(0.3)
+        history = [m for _, m in ls.status]
+        s1 = ls.last()
+        ls.close()
+        reader.join()
+        primary.close()
+    after = [m for m in history if m.tick > s0.tick]
+    jump_q = max(abs(m.q_actual[j] - s0.q_actual[j]) for m in after for j in range(6))
+    jump_target = max(abs(m.q_target[j] - s0.q_target[j]) for m in after for j in range(6))
+    errors = [m for m in messages if m["type"] == 6]
+    modes = [m["safety_mode"] for m in messages if m["type"] == 5]
+    print(f"\nLCM jump of 0.5 rad: safety {s1.safety_mode}, largest |q - q0| "
+          f"{jump_q:.2e} rad, |q_target - q_target0| {jump_target:.2e} rad; 30001: "
+          f"{[(m['code'], m['argument'], m['level'], m['text']) for m in errors]}, modes {modes}")
+    assert s1.safety_mode == 3  # PROTECTIVE_STOP
+    assert modes == [3]
+    assert [(m["code"], m["argument"], m["text"]) for m in errors] == [
+        (204, 0, "Protective Stop: Invalid setpoints: Position jump")]
+    # neither the set-point nor the arm took the step: the stop holds where the arm stood (the
+    # set-point moves by the arm's tracking error, micro-radians)
+    assert jump_target < 1e-3
+    assert jump_q < 1e-3
 
 
 def test_lcm_lockstep_one_tick_per_command():

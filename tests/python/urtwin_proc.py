@@ -63,9 +63,10 @@ def wait_port(host, port, timeout=5.0):
 class Emulator:
     """A running urtwin. Use as a context manager; args are extra command-line options."""
 
-    def __init__(self, *args, host=None, version="5.19"):
+    def __init__(self, *args, host=None, version="5.19", nofile=None):
         self.host = host or next_host()
         self.version = version
+        self.nofile = nofile  # a descriptor limit (soft = hard) for the emulator, or None
         self.args = [URTWIN, "--config", CONFIG, "--bind", self.host, "--controller-version",
                      version, "--stats-every", "0", *RT_ARGS, *args]
         self.proc = None
@@ -73,8 +74,15 @@ class Emulator:
 
     def __enter__(self):
         self.start_time = time.monotonic()
+        limit = None
+        if self.nofile:
+            import resource
+            n = self.nofile
+
+            def limit():
+                resource.setrlimit(resource.RLIMIT_NOFILE, (n, n))
         self.proc = subprocess.Popen(self.args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                     cwd=ROOT)
+                                     cwd=ROOT, preexec_fn=limit)
         try:
             for port in (30001, 30002, 30003):
                 wait_port(self.host, port)
@@ -222,6 +230,12 @@ def decode_robot_message(body):
     elif mtype == 10:
         line, col = struct.unpack_from(">II", rest, 0)
         msg.update(line=line, column=col, text=rest[8:].decode(errors="replace"))
+    elif mtype == 6:
+        code, arg, level, dtype, data = struct.unpack_from(">iiiII", rest, 0)
+        msg.update(code=code, argument=arg, level=level, text=rest[20:].decode(errors="replace"))
+    elif mtype == 5:
+        code, arg, mode = struct.unpack_from(">iiB", rest, 0)
+        msg.update(code=code, argument=arg, safety_mode=mode)
     elif mtype == 3:
         n = rest[0]
         msg.update(project=rest[1:1 + n].decode(), major=rest[1 + n], minor=rest[2 + n])

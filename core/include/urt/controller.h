@@ -160,7 +160,10 @@ enum {
   URT_CTRL_FAULT_IK = 1u << 2,             /* no inverse-kinematics solution             */
   URT_CTRL_FAULT_BAD_ARGUMENT = 1u << 3,   /* a, v, t, gain… outside the allowed range   */
   URT_CTRL_FAULT_PSTOP = 1u << 4,          /* the physics entered a protective stop      */
-  URT_CTRL_FAULT_SCRIPT_PSTOP = 1u << 5    /* a program asked for it (protective_stop())  */
+  URT_CTRL_FAULT_SCRIPT_PSTOP = 1u << 5,   /* a program asked for it (protective_stop())  */
+  URT_CTRL_FAULT_JUMP = 1u << 6            /* an external set-point (DIRECT) further from the
+                                              set-point than its joint moves in one period at
+                                              qd_max → pstop (C204A0 on 30001)            */
 };
 
 typedef struct urt_ctrl {

@@ -84,8 +84,11 @@ double urt_loop_period(const urt_loop_t *l);
  * Returns a producer index ≥ 0 or URT_ENOSPC. Context: non-RT, before or after start. */
 int urt_loop_add_producer(urt_loop_t *l, const char *name);
 
-/* Push one command; drained by the physics thread at the start of the next tick.
- * Never waits: returns false (and counts it) when that ring is full. */
+/* Push one command; drained by the physics thread at the start of the next tick, the rings
+ * taken in turn one command at a time (a ring's commands keep their order; no producer's
+ * backlog goes before another's next command). Never waits: returns false (and counts it
+ * for that ring) when that ring is full. A thread may own several rings (the I/O thread: one
+ * per kind of client), a ring never more than one thread. */
 bool urt_loop_submit(urt_loop_t *l, int producer, const urt_ctrl_cmd_t *cmd);
 
 /* Tick of the newest published snapshot (0 before the first). Context: any. */
@@ -112,6 +115,13 @@ int urt_loop_read_drive(const urt_loop_t *l, uint64_t seq, urt_drive_sample_t *o
  * Returns once the physics thread no longer uses the previous fd (it may then be closed): a
  * wait of at most one eventfd write. Context: non-RT. */
 void urt_loop_set_notify_fd(urt_loop_t *l, int eventfd);
+
+/* The command rings claimed so far, and per ring its producer's name and the commands it
+ * could not push because the ring was full (any thread). Returns the ring count; name and
+ * dropped of ring i < count (NULL / 0 otherwise). */
+int urt_loop_producer_count(const urt_loop_t *l);
+const char *urt_loop_producer_name(const urt_loop_t *l, int producer);
+uint64_t urt_loop_producer_dropped(const urt_loop_t *l, int producer);
 
 /* Lockstep pacing: allow n more controller ticks. Other pacings ignore it. */
 void urt_loop_grant(urt_loop_t *l, uint64_t n);

@@ -156,10 +156,79 @@ static void test_emulator__primary_starts_with_version(void **state) {
   }
 }
 
+// Read the dashboard's greeting line: 1 when it came, 0 on an orderly close first.
+static int dashboard_greeted(int fd) {
+  char buf[128];
+  size_t got = 0;
+  while (got < sizeof buf - 1) {
+    ssize_t r = recv(fd, buf + got, sizeof buf - 1 - got, 0);
+    if (r <= 0) {
+      return 0;
+    }
+    got += (size_t)r;
+    if (memchr(buf, '\n', got)) {
+      buf[got] = 0;
+      return strstr(buf, "Connected: Universal Robots Dashboard Server") != NULL;
+    }
+  }
+  return 0;
+}
+
+// A second emulator with a cap of 2 clients per port: the third dashboard client is accepted and
+// closed without a greeting (counted), 30003 keeps its own count, and once a client leaves, a
+// new one gets in.
+static void test_emulator__clients_beyond_the_cap_are_closed(void **state) {
+  fixture_t *f = *state;
+  int offset = g_offset - 10000;  // ports 39999…49993: clear of every fixture's 49999…59993
+  urt_emulator_config_t ec = {.bind = kHost, .port_offset = offset, .max_clients = 2};
+  assert_int_equal(urt_version_parse("5.19", &ec.version), 0);
+  urt_emulator_t *emu = NULL;
+  urt_loop_t *loop = NULL;
+  char err[256];
+  urt_loop_config_t lc = {.period = 0.002, .pacing = URT_PACING_TICK, .powered = 1};
+  assert_int_equal(urt_loop_create(f->m, &lc, NULL, &loop, err, sizeof err), 0);
+  assert_int_equal(urt_emulator_create(loop, &ec, &emu, err, sizeof err), 0);
+  urt_loop_start(loop);
+  assert_int_equal(urt_emulator_start(emu), 0);
+  int a = connect_to(29999 + offset), b = connect_to(29999 + offset);
+  assert_true(a >= 0 && b >= 0);
+  assert_int_equal(dashboard_greeted(a), 1);
+  assert_int_equal(dashboard_greeted(b), 1);
+  int c = connect_to(29999 + offset);  // the kernel completes the handshake; urtwin closes it
+  assert_true(c >= 0);
+  assert_int_equal(dashboard_greeted(c), 0);
+  close(c);
+  int rt1 = connect_to(30003 + offset), rt2 = connect_to(30003 + offset);  // another port's cap
+  uint8_t hdr[4];
+  assert_int_equal(recv_all(rt1, hdr, 4), 0);
+  assert_int_equal(recv_all(rt2, hdr, 4), 0);
+  urt_emulator_stats_t st;
+  urt_emulator_get_stats(emu, &st);
+  assert_int_equal(st.refused_cap, 1);
+  assert_int_equal(st.clients, 4);
+  close(a);
+  int greeted = 0;
+  for (int attempt = 0; attempt < 50 && !greeted; attempt++) {  // the close takes a moment
+    int d = connect_to(29999 + offset);
+    greeted = d >= 0 && dashboard_greeted(d);
+    close(d);
+    if (!greeted) {
+      usleep(20000);
+    }
+  }
+  assert_int_equal(greeted, 1);
+  close(b);
+  close(rt1);
+  close(rt2);
+  urt_emulator_destroy(emu);
+  urt_loop_destroy(loop);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_emulator__rt_packets_carry_the_loops_state),
       cmocka_unit_test(test_emulator__primary_starts_with_version),
+      cmocka_unit_test(test_emulator__clients_beyond_the_cap_are_closed),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }

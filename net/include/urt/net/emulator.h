@@ -39,7 +39,18 @@ typedef struct urt_emulator_config {
      refuses any other host. */
   const char *external_control_host;
   int external_control_port;
+  /* Clients at once on each port (0: URT_EMULATOR_MAX_CLIENTS). UR documents no limit; a
+     connection beyond it is accepted and closed at once, with a log line (rate-limited). */
+  int max_clients;
+  /* Bytes of output buffers all clients together may hold (0: URT_EMULATOR_OUT_BUDGET). */
+  size_t out_budget;
 } urt_emulator_config_t;
+
+/* The defaults: a UR client stack opens 1–4 connections per port (ur_rtde's receive, control
+   and IO interfaces on 30004; URCL's primary, RTDE, dashboard), so 32 per port leaves room for
+   several of them; 16 MiB of output is 32 clients that never read 30003 (512 KiB each). */
+#define URT_EMULATOR_MAX_CLIENTS 32
+#define URT_EMULATOR_OUT_BUDGET (16u * 1024u * 1024u)
 
 /* Per-port counters (readable while running, approximately). */
 typedef struct urt_emulator_stats {
@@ -49,6 +60,10 @@ typedef struct urt_emulator_stats {
   uint64_t state_messages;   /* robot-state messages queued on 30001/30002           */
   uint64_t ticks_lost;       /* ticks the I/O thread fell too far behind to stream    */
   uint64_t scripts;          /* script units received                                */
+  uint64_t refused_cap;      /* connections closed at once: their port was at its cap  */
+  uint64_t refused_fds;      /* connections closed at once: no descriptor left (EMFILE) */
+  uint64_t out_bytes;        /* output buffers allocated now, all clients            */
+  uint64_t out_refused;      /* buffer growths refused for the output budget          */
 } urt_emulator_stats_t;
 
 typedef struct urt_emulator urt_emulator_t;
