@@ -53,7 +53,7 @@ static int b_get_target_payload_cog(vm *V, const us_node *n, sv *a, sv *out) {
 }
 
 static int b_get_target_payload_inertia(vm *V, const us_node *n, sv *a, sv *out) {
-  return list_out(V, n, urt__us_snap(V)->payload_inertia, 6, out);
+  return urt__us_list_out(V, n, urt__us_snap(V)->payload_inertia, 6, out);
 }
 
 /* the payload the arm carries now, as the snapshot reports it */

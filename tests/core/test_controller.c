@@ -800,6 +800,8 @@ static void test_controller__set_payload_mounts_it_at_the_next_tick(void **state
   rig_period(&r, &p);
   assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
   assert_true(r.d->live.payload.mass == 3.0 && r.c->payload_mass == 3.0);
+  rig_free(&r);
+}
 
 // An external set-point 0.5 rad from the current one (250 rad/s over a 2 ms period) is a
 // protective stop where the arm is, flagged as a jump; a step of just under qd_max · period is
