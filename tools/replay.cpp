@@ -117,21 +117,63 @@ int replay_run(const urt_model_t *m, const ReplayRecording &rec, ReplayResult *r
 
   // the period: the recording's own sample interval, as a whole number of physics steps. Not
   // the median: a file that drops samples often (no1.csv has as many 24 ms as 8 ms intervals)
-  // would give a multiple of it; the 10th percentile is the interval itself
+  // would give a multiple of it; the 10th percentile is near the interval itself
   std::vector<double> dts(n - 1);
   for (size_t i = 0; i + 1 < n; i++) {
     dts[i] = rec.t[i + 1] - rec.t[i];
   }
   std::vector<double> sorted = dts;
-  const size_t p10 = sorted.size() / 10;
-  std::nth_element(sorted.begin(), sorted.begin() + (long)p10, sorted.end());
-  const double interval = sorted[p10];
+  std::sort(sorted.begin(), sorted.end());
+  const double p10 = sorted[sorted.size() / 10];
+  // then the median of the intervals near it, so that a millisecond of logging jitter does not
+  // move the period
+  std::vector<double> near;
+  for (double d : sorted) {
+    if (d > 0.5 * p10 && d < 1.5 * p10) {
+      near.push_back(d);
+    }
+  }
+  const double interval = near[near.size() / 2];
   const long n_sub = std::max(1L, std::lround(interval / m->dt));
   const double T = (double)n_sub * m->dt;
   res->period = T;
   for (double d : dts) {
     res->max_gap = std::max(res->max_gap, d);
     res->gaps += d > 1.5 * T;
+  }
+
+  // the set-point on the controller's grid. The controller ran at a fixed period, but the
+  // logged times jitter and drift against it (no1.csv: 6.542, 6.567, 6.574 for ticks 24 ms and
+  // 8 ms apart; by 12 s its times are half a period off a grid from t0), and interpolating
+  // positions at the logged times feeds velocity errors of up to 0.13 rad/s, which the position
+  // gain turns into current spikes of several amperes. So each sample sits the nearest whole
+  // number of periods after the previous one; a sample less than half a period after it is
+  // dropped.
+  static ReplayRecording fed;
+  static std::vector<long> tick_of;
+  fed = ReplayRecording{};
+  fed.has_target_qdd = rec.has_target_qdd;
+  tick_of.assign(n, 0);
+  long last_k = 0;
+  size_t last_i = 0;
+  for (size_t i = 0; i < n; i++) {
+    long k = i == 0 ? 0 : last_k + std::lround((rec.t[i] - rec.t[last_i]) / T);
+    tick_of[i] = std::max(k, last_k);
+    if (i > 0 && k <= last_k) {
+      res->dropped++;
+      continue;
+    }
+    res->max_time_offset = std::max(res->max_time_offset,
+                                    std::fabs(rec.t[i] - rec.t[last_i] - (double)(k - last_k) * T));
+    last_k = k;
+    last_i = i;
+    fed.t.push_back(rec.t[0] + (double)k * T);
+    fed.line.push_back(rec.line[i]);
+    fed.target_q.push_back(rec.target_q[i]);
+    fed.target_qd.push_back(rec.target_qd[i]);
+    if (rec.has_target_qdd) {
+      fed.target_qdd.push_back(rec.target_qdd[i]);
+    }
   }
 
   // start at rest at the first recorded set-point
@@ -150,9 +192,9 @@ int replay_run(const urt_model_t *m, const ReplayRecording &rec, ReplayResult *r
     return 1;
   }
 
-  // the twin on the controller's grid t0 + k T; each recorded sample reads the nearest tick
+  // the twin on the controller's grid t0 + k T; each recorded sample reads its tick
   const double t0 = rec.t[0];
-  const long ticks = std::lround((rec.t[n - 1] - t0) / T);
+  const long ticks = last_k;
   std::vector<Joints> grid_q((size_t)ticks + 1), grid_qd((size_t)ticks + 1),
       grid_i((size_t)ticks + 1);
   auto sample = [&](long k) {
@@ -172,7 +214,7 @@ int replay_run(const urt_model_t *m, const ReplayRecording &rec, ReplayResult *r
     std::memset(&cmd, 0, sizeof cmd);
     cmd.kind = URT_CTRL_SETPOINT;
     cmd.id = (uint64_t)k + 1;
-    setpoint_at(rec, &cursor, t0 + (double)(k + 1) * T, cmd.q, cmd.qd, cmd.pose);
+    setpoint_at(fed, &cursor, t0 + (double)(k + 1) * T, cmd.q, cmd.qd, cmd.pose);
     urt_ctrl_apply(m, &c, &d, &cmd);
     urt_ctrl_tick(m, &c, &d);
     if (c.safety_mode != URT_SAFETY_MODE_NORMAL) {
@@ -180,7 +222,7 @@ int replay_run(const urt_model_t *m, const ReplayRecording &rec, ReplayResult *r
       std::snprintf(buf, sizeof buf,
                     "t = %.3f s (line %d): the controller refused the set-point (fault 0x%x, "
                     "pstop 0x%x)",
-                    t0 + (double)(k + 1) * T, rec.line[std::min(cursor + 1, n - 1)],
+                    t0 + (double)(k + 1) * T, fed.line[std::min(cursor + 1, fed.t.size() - 1)],
                     (unsigned)c.fault, (unsigned)d.pstop);
       *err = buf;
       return 1;
@@ -201,6 +243,8 @@ int replay_run(const urt_model_t *m, const ReplayRecording &rec, ReplayResult *r
   }
   res->wall = now_s() - wall0;
   res->ticks = ticks;
+  res->steps = (long)d.steps;
+  res->refined = (long)d.refined_count;
 
   // the twin at the recorded samples, and the statistics
   Moments mt[URT_NJ], mu[URT_NJ];
@@ -212,7 +256,7 @@ int replay_run(const urt_model_t *m, const ReplayRecording &rec, ReplayResult *r
   res->twin_qd.resize(n);
   res->twin_current.resize(n);
   for (size_t i = 0; i < n; i++) {
-    long k = std::min(ticks, std::max(0L, std::lround((rec.t[i] - t0) / T)));
+    long k = tick_of[i];
     res->twin_q[i] = grid_q[(size_t)k];
     res->twin_qd[i] = grid_qd[(size_t)k];
     res->twin_current[i] = grid_i[(size_t)k];
@@ -308,8 +352,12 @@ bool replay_write_json(const std::string &path, const urt_model_t *m, const Repl
                rec.path.c_str(), rec.t.size(), dur);
   std::fprintf(f, "  \"period\": %.6g,\n  \"gaps\": %ld,\n  \"max_gap\": %.6g,\n", res.period,
                res.gaps, res.max_gap);
-  std::fprintf(f, "  \"wall\": %.6g,\n  \"speed\": %.6g,\n  \"joints\": [\n", res.wall,
+  std::fprintf(f, "  \"wall\": %.6g,\n  \"speed\": %.6g,\n", res.wall,
                res.wall > 0 ? dur / res.wall : 0.0);
+  std::fprintf(f, "  \"max_time_offset\": %.6g,\n  \"dropped\": %ld,\n", res.max_time_offset,
+               res.dropped);
+  std::fprintf(f, "  \"steps\": %ld,\n  \"refined_steps\": %ld,\n  \"joints\": [\n", res.steps,
+               res.refined);
   for (int j = 0; j < URT_NJ; j++) {
     const ReplayJointStats &s = res.joint[j];
     std::fprintf(f,
@@ -335,9 +383,10 @@ void replay_print(FILE *f, const urt_model_t *m, const ReplayRecording &rec,
   double dur = rec.t.back() - rec.t.front();
   std::fprintf(f,
                "replay of %s: %zu samples, %.3f s, fed every %.4g s (%ld gaps filled, longest "
-               "interval %.4g s); %.3f s wall, %.1f x real time\n",
-               rec.path.c_str(), rec.t.size(), dur, res.period, res.gaps, res.max_gap, res.wall,
-               res.wall > 0 ? dur / res.wall : 0.0);
+               "interval %.4g s, intervals up to %.4g s off a whole number of periods, %ld on a taken tick dropped); %.3f s wall, %.1f x real time; %ld of %ld steps refined\n",
+               rec.path.c_str(), rec.t.size(), dur, res.period, res.gaps, res.max_gap,
+               res.max_time_offset, res.dropped, res.wall, res.wall > 0 ? dur / res.wall : 0.0,
+               res.refined, res.steps);
   std::fprintf(f, "%-9s %5s %9s %12s %11s %10s %9s %9s %8s\n", "joint", "moves", "rms_meas",
                "rms_err_twin", "rms_err_ur", "ratio_twin", "ratio_ur", "corr_twin", "corr_ur");
   for (int j = 0; j < URT_NJ; j++) {

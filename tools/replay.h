@@ -25,7 +25,10 @@ struct ReplayResult {
   long ticks = 0;              // controller periods run
   long gaps = 0;               // sample intervals longer than 1.5 periods (filled)
   double max_gap = 0.0;        // longest sample interval [s]
+  double max_time_offset = 0;  // largest distance of a sample interval from whole periods [s]
+  long dropped = 0;            // samples on a tick another sample already took
   double wall = 0.0;           // wall time of the simulation [s]
+  long steps = 0, refined = 0; // physics steps, and those redone as fine steps (urt_step)
   std::vector<Joints> twin_q, twin_qd, twin_current;  // the twin at each recorded sample
   ReplayJointStats joint[URT_NJ];
 };
@@ -38,7 +41,8 @@ void replay_limit_overrides(const urt_model_t *m, const ReplayRecording &rec,
 // Run the replay: the twin starts at the first recorded target_q at rest; every controller
 // period (the recording's sample interval, its 10th percentile, a whole number of physics steps) the
 // controller takes the recorded set-point at the period's end (samples missing in a gap are
-// interpolated: q by cubic Hermite on q and q̇, q̇ and q̈ linearly) and the drives follow its
+// interpolated: q by cubic Hermite on q and q̇, q̇ and q̈ linearly; each sample is placed the
+// nearest whole number of periods after the previous one, as the controller produced it) and the drives follow its
 // interpolation. Returns 0, or 1 with a message in *err (a refused set-point, a failed step).
 int replay_run(const urt_model_t *m, const ReplayRecording &rec, ReplayResult *res,
                std::string *err);

@@ -247,3 +247,26 @@ def test_replay__missing_file_is_a_usage_error(tmp_path):
 def test_replay__options_that_need_replay_are_refused_without_it():
     res = sim("--summary-json", "/dev/null", ok=False)
     assert res.returncode == 2 and "go with --replay" in res.stderr
+
+
+def test_replay__logged_time_jitter_and_drift_do_not_reach_the_set_point(tmp_path):
+    # no1.csv's times jitter by a millisecond and drift 4 ms in 12 s against the 8 ms grid;
+    # each sample is placed whole periods after the previous one, so the set-point is the same
+    t = np.round(np.arange(0.0, 1.0 + 1e-9, 0.008), 6)
+    q, qd, qdd = motion(t)
+    rng = np.random.default_rng(1)
+    t_log = np.round(t * 1.0004 + rng.uniform(-0.0009, 0.0009, len(t)) * (np.arange(len(t)) > 0),
+                     3)
+    cols = {"target_q": q, "target_qd": qd, "target_qdd": qdd,
+            "actual_current": np.zeros_like(q)}
+    write_recording(tmp_path / "clean.csv", t, cols)
+    write_recording(tmp_path / "jitter.csv", t_log, cols)
+    sim("--replay", tmp_path / "clean.csv", "--out", tmp_path / "clean.txt", "--quiet")
+    sim("--replay", tmp_path / "jitter.csv", "--out", tmp_path / "jitter.txt",
+        "--summary-json", tmp_path / "jitter.json", "--quiet")
+    a, b = read_trace(tmp_path / "clean.txt"), read_trace(tmp_path / "jitter.txt")
+    s = json.loads((tmp_path / "jitter.json").read_text())
+    assert s["dropped"] == 0 and s["gaps"] == 0
+    for j in (1, 2):
+        # the same ticks, the same set-point: the same currents
+        assert np.array_equal(a[f"twin_current_{j}"], b[f"twin_current_{j}"]), j
