@@ -25,7 +25,8 @@
 //   reference and the controller's model (feed-forward, target current, TCP force, freedrive)
 //   all read d->live.payload, so the twin carries what the program says it carries. A payload
 //   outside urt_payload_invalid()'s bounds (over 5 kg, CoG beyond 1 m, a non-physical inertia)
-//   is refused. A transition time is not modelled: the change is at once.
+//   is refused. With a transition time t (set_target_payload) the payload moves linearly to the
+//   new one over t, a step each tick (urt_data_live_advance); payload_mass/cog are the target.
 // - PAUSE multiplies the slider's scaling by a pause factor that slews to 0 at 4 /s (RESUME: back
 //   to 1), so movej/movel (and a movej waiting behind a stop) slow down along their path, hold,
 //   and continue; streamed motions (servoj/l/c, speedj/l, direct, torque, freedrive, force) stop
@@ -336,7 +337,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       p.mass = cmd->value;
       std::memcpy(p.cog, cmd->pose, sizeof p.cog);
       std::memcpy(p.inertia, cmd->tau, sizeof p.inertia);
-      if (urt_data_set_payload(m, d, &p) != URT_OK) {
+      if (urt_data_set_payload_target(m, d, &p, cmd->t) != URT_OK) {
         c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
       } else {
         c->payload_mass = p.mass;
@@ -478,6 +479,9 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
   std::memcpy(c->qd0, c->qd1, sizeof c->qd0);
   std::memcpy(c->qdd0, c->qdd1, sizeof c->qdd0);
   std::memcpy(c->tau_model0, c->tau_model1, sizeof c->tau_model0);
+
+  // parameters in transition (a payload's transition_time) take this period's value
+  urt_data_live_advance(m, d, c->period);
 
   tick_thermal(m, c, d);
 

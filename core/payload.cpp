@@ -57,5 +57,48 @@ extern "C" int urt_data_set_payload(const urt_model_t* m, urt_data_t* d, const u
     return URT_EINVAL;
   }
   d->live.payload = *p;
+  d->live.payload_time_left = 0.0;  // a change at once ends a transition in progress
   return URT_OK;
+}
+
+extern "C" int urt_data_set_payload_target(const urt_model_t* m, urt_data_t* d,
+                                           const urt_payload_t* p, double transition_time) {
+  if (!(transition_time >= 0.0 && transition_time <= 1000.0)) {
+    return URT_EINVAL;
+  }
+  if (transition_time == 0.0) {
+    return urt_data_set_payload(m, d, p);
+  }
+  if (urt_payload_invalid(p)) {
+    return URT_EINVAL;
+  }
+  d->live.payload_target = *p;
+  d->live.payload_time_left = transition_time;
+  return URT_OK;
+}
+
+extern "C" void urt_data_live_advance(const urt_model_t* m, urt_data_t* d, double h) {
+  (void)m;
+  urt_live_params_t& l = d->live;
+  if (l.payload_time_left <= 0.0) {
+    return;
+  }
+  // the straight line from here to the target, the fraction h of the time left; every point on
+  // it is a valid payload (bounds are boxes, PSD matrices a convex cone)
+  if (h >= l.payload_time_left) {
+    l.payload = l.payload_target;
+    l.payload_time_left = 0.0;
+    return;
+  }
+  const double f = h / l.payload_time_left;
+  urt_payload_t& p = l.payload;
+  const urt_payload_t& t = l.payload_target;
+  p.mass += f * (t.mass - p.mass);
+  for (int i = 0; i < 3; i++) {
+    p.cog[i] += f * (t.cog[i] - p.cog[i]);
+  }
+  for (int i = 0; i < 6; i++) {
+    p.inertia[i] += f * (t.inertia[i] - p.inertia[i]);
+  }
+  l.payload_time_left -= h;
 }

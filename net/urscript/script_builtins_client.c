@@ -6,7 +6,7 @@
  * torques, set_gravity / set_target_payload / set_tool_voltage, and popup.
  *
  * set_target_payload (script_builtins_modes.c) mounts mass, centre of gravity and inertia on
- * link 6 through the controller's SET_PAYLOAD; the transition time is applied at once.
+ * link 6 through the controller's SET_PAYLOAD, over its transition time.
  */
 #include <math.h>
 #include <stdio.h>

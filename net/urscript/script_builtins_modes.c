@@ -138,7 +138,7 @@ static int b_protective_stop(vm *V, const us_node *n, sv *a, sv *out) {
  * inertia about the CoG with flange-parallel axes (UR's conventions), mounted on link 6 at the
  * next controller tick (core/payload.cpp). A payload the physics cannot carry (over 5 kg, a CoG
  * beyond 1 m, a non-physical inertia) is a runtime error with urt_payload_invalid()'s reason.
- * transition_time is checked but not modelled: the change is at once (as with t = 0). */
+ * With transition_time > 0 the payload moves linearly to the new one over that time. */
 static int b_set_target_payload(vm *V, const us_node *n, sv *a, sv *out) {
   urt_ctrl_cmd_t c = {.kind = URT_CTRL_SET_PAYLOAD};
   double t;
@@ -156,6 +156,8 @@ static int b_set_target_payload(vm *V, const us_node *n, sv *a, sv *out) {
     }
   }
   if (!(t >= 0)) return urt__us_fail(V, n, "set_target_payload: negative transition_time %g", t);
+  if (!(t <= 1000)) return urt__us_fail(V, n, "set_target_payload: transition_time %g s is beyond urtwin's 1000 s", t);
+  c.t = t;
   urt_payload_t p = {.mass = c.value};
   memcpy(p.cog, c.pose, sizeof p.cog);
   memcpy(p.inertia, c.tau, sizeof p.inertia);

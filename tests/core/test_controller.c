@@ -800,6 +800,18 @@ static void test_controller__set_payload_mounts_it_at_the_next_tick(void **state
   rig_period(&r, &p);
   assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
   assert_true(r.d->live.payload.mass == 3.0 && r.c->payload_mass == 3.0);
+
+  // with a transition time the payload moves there linearly, a step per tick
+  p = cmd_of(&r, URT_CTRL_SET_PAYLOAD);
+  p.value = 1.0;
+  p.t = 0.1;
+  rig_period(&r, &p);  // applied, then the tick takes the first 2 ms of it
+  assert_near(r.d->live.payload.mass, 3.0 - 2.0 * 0.02, 1e-12);
+  assert_true(r.c->payload_mass == 1.0);  // the controller's record is the target
+  run_for(&r, 0.05);
+  assert_near(r.d->live.payload.mass, 3.0 - 2.0 * 0.52, 1e-9);
+  run_for(&r, 0.1);
+  assert_true(r.d->live.payload.mass == 1.0 && r.d->live.payload_time_left == 0.0);
   rig_free(&r);
 }
 

@@ -73,6 +73,43 @@ static void test_payload__zero_payload_leaves_the_dynamics_bit_for_bit(void **st
   urt_model_free(m);
 }
 
+/* set_target_payload's transition: linear from the old payload to the new over the time given,
+ * one controller period at a time; a change at once ends it */
+static void test_payload__transition_is_linear_and_ends_on_the_target(void **state) {
+  (void)state;
+  urt_model_t *m = urt_test_model(NULL);
+  urt_data_t *d = calloc(1, sizeof *d);
+  assert_int_equal(urt_data_init(m, d, NULL), 0);
+  assert_int_equal(urt_data_set_payload_target(m, d, &kLoad, 0.1), URT_OK);
+  assert_true(d->live.payload.mass == 0.0);  // nothing yet: the controller's tick advances it
+  for (int k = 1; k <= 60; k++) {
+    urt_data_live_advance(m, d, 0.002);
+    double s = fmin(k * 0.002 / 0.1, 1.0);
+    assert_near(d->live.payload.mass, s * kLoad.mass, 1e-12);
+    assert_near(d->live.payload.cog[2], s * kLoad.cog[2], 1e-12);
+    assert_near(d->live.payload.inertia[5], s * kLoad.inertia[5], 1e-15);
+    assert_null(urt_payload_invalid(&d->live.payload));
+  }
+  assert_memory_equal(&d->live.payload, &kLoad, sizeof kLoad);  // exactly the target at the end
+  assert_true(d->live.payload_time_left == 0.0);
+  // a transition interrupted by a change at once stops there
+  const urt_payload_t none = {0};
+  assert_int_equal(urt_data_set_payload_target(m, d, &none, 1.0), URT_OK);
+  urt_data_live_advance(m, d, 0.002);
+  assert_int_equal(urt_data_set_payload(m, d, &kLoad), URT_OK);
+  urt_data_live_advance(m, d, 0.002);
+  assert_memory_equal(&d->live.payload, &kLoad, sizeof kLoad);
+  // a bad time or payload changes nothing
+  assert_int_equal(urt_data_set_payload_target(m, d, &none, -1.0), URT_EINVAL);
+  assert_int_equal(urt_data_set_payload_target(m, d, &none, NAN), URT_EINVAL);
+  urt_payload_t bad = kLoad;
+  bad.mass = 9.0;
+  assert_int_equal(urt_data_set_payload_target(m, d, &bad, 1.0), URT_EINVAL);
+  assert_true(d->live.payload_time_left == 0.0);
+  free(d);
+  urt_model_free(m);
+}
+
 /* the payload's weight through the flange: Δg = −J_v(c)ᵀ m g, J_v the linear Jacobian of its
  * CoG point (from urt_arm_frame, by central differences) */
 static void test_payload__gravity_rises_by_the_weight_at_the_cog(void **state) {
@@ -141,6 +178,7 @@ int main(void) {
       cmocka_unit_test(test_payload__invalid_names_what_no_payload_can_be),
       cmocka_unit_test(test_payload__set_mounts_a_valid_payload_and_keeps_the_old_on_refusal),
       cmocka_unit_test(test_payload__zero_payload_leaves_the_dynamics_bit_for_bit),
+      cmocka_unit_test(test_payload__transition_is_linear_and_ends_on_the_target),
       cmocka_unit_test(test_payload__gravity_rises_by_the_weight_at_the_cog),
       cmocka_unit_test(test_payload__steps_settle_at_the_loaded_holding_current),
   };

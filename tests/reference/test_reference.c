@@ -49,7 +49,9 @@ static double rms_rel_error(const double *a, const double *b, int n) {
   return sqrt(e2 / b2);
 }
 
-static void compare(const char *const *extra, double duration, const bounds_t *lim) {
+/* mount: NULL, or a payload mounted on both runs half-way (a change at a step boundary) */
+static void compare_mounting(const char *const *extra, double duration, const bounds_t *lim,
+                             const urt_payload_t *mount) {
   const char *ov[16] = {"sensors.noise=false", "sensors.quantise=false"};
   int n_ov = 2;
   for (; extra && *extra; extra++) {
@@ -75,6 +77,10 @@ static void compare(const char *const *extra, double duration, const bounds_t *l
     urt_command_t c;
     memset(&c, 0, sizeof c);
     urt_traj_eval(&tr, a->t, c.q, c.qd, c.qdd);
+    if (mount && k == n / 2) {
+      assert_int_equal(urt_data_set_payload(m, a, mount), 0);
+      assert_int_equal(urt_data_set_payload(m, b, mount), 0);
+    }
     assert_int_equal(urt_command_set(m, a, &c), 0);
     assert_int_equal(urt_command_set(m, b, &c), 0);
     assert_int_equal(urt_step(m, a), 0);
@@ -110,6 +116,10 @@ static void compare(const char *const *extra, double duration, const bounds_t *l
   urt_model_free(m);
 }
 
+static void compare(const char *const *extra, double duration, const bounds_t *lim) {
+  compare_mounting(extra, duration, lim, NULL);
+}
+
 // The bounds, 1e-5 rad and 2 % RMS current, on every joint, at 20 kHz. (With model.md's
 // k_q = 10 on the wrists, wrists 1–2 self-excite a chaotic ~300 Hz stick-slip cycle that CVODE
 // cannot reproduce against itself; config/README.md says why the wrists use k_q = 5.)
@@ -131,8 +141,22 @@ static void test_reference__10khz_stays_stable_and_within_the_bounds(void **stat
   compare(ov, 1.0, &lim);
 }
 
+// With a payload the same bounds hold: 3 kg 0.1 m out from the config, then half-way a 1.5 kg
+// payload off the axis with a full inertia mounted on both runs (CVODE integrates urt_rhs, which
+// reads the run's payload, as urt_step does).
+static void test_reference__20khz_matches_cvode_with_a_payload_and_a_payload_change(void **state) {
+  (void)state;
+  const char *const ov[] = {"simulation.dt=5e-5", "payload.mass=3.0", "payload.cog=[0.0, 0.0, 0.1]",
+                            NULL};
+  const urt_payload_t other = {1.5, {0.03, -0.02, 0.06}, {0.002, 0.003, 0.0025, 0.0003, 0.0, -0.0002}};
+  const bounds_t lim = {
+      {1e-5, 1e-5, 1e-5, 1e-5, 1e-5, 1e-5}, {0.02, 0.02, 0.02, 0.02, 0.02, 0.02}, 0.02};
+  compare_mounting(ov, 0.4, &lim, &other);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_reference__20khz_matches_cvode_with_a_payload_and_a_payload_change),
       cmocka_unit_test(test_reference__20khz_matches_cvode_on_1_s_of_excitation),
       cmocka_unit_test(test_reference__10khz_stays_stable_and_within_the_bounds),
   };

@@ -101,7 +101,8 @@ typedef enum urt_ctrl_cmd_kind {
   URT_CTRL_SET_TCP,           /* pose[6]                                                    */
   URT_CTRL_SET_PAYLOAD,       /* value = mass [kg], pose[0..2] = CoG [m] (flange frame),
                                  tau[0..5] = inertia about the CoG, Ixx Iyy Izz Ixy Ixz Iyz
-                                 [kg m²]: mounted on link 6 at this tick (urt_data_set_payload) */
+                                 [kg m²]; t = transition time [s] (0: at once): mounted on link 6
+                                 from this tick (urt_data_set_payload_target)                */
   /* robot state machine */
   URT_CTRL_POWER_ON,
   URT_CTRL_POWER_OFF,

@@ -68,6 +68,16 @@ int urt_data_init(const urt_model_t *m, urt_data_t *d, const double *q);
  * Context: RT (the controller calls it at a tick boundary). Returns 0 or URT_EINVAL. */
 int urt_data_set_payload(const urt_model_t *m, urt_data_t *d, const urt_payload_t *p);
 
+/* As urt_data_set_payload, reached linearly (mass, CoG and inertia element by element) over
+ * transition_time [s] in steps of urt_data_live_advance; 0 is at once. transition_time must be
+ * finite and in [0, 1000]. Context: RT. Returns 0 or URT_EINVAL (nothing changes). */
+int urt_data_set_payload_target(const urt_model_t *m, urt_data_t *d, const urt_payload_t *p,
+                                double transition_time);
+
+/* Advance the live parameters' transitions by h [s] (the controller calls it once a tick, before
+ * it plans; without a transition it changes nothing). Context: RT. */
+void urt_data_live_advance(const urt_model_t *m, urt_data_t *d, double h);
+
 /* Validate and install a joint command. A command with NaN/Inf, positions outside the joint
  * limits, speeds above qd_max, accelerations above qdd_max or torques above torque_max is
  * refused: the previous set-point is held (frozen at the current measured position, zero

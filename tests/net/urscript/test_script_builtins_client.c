@@ -201,6 +201,7 @@ static void test_client__gravity_and_target_payload_commands(void **state) {
   assert_true(R.f.cmd[0].pose[2] == -9.82 && R.f.cmd[0].pose[0] == 0);  // towards the earth
   assert_int_equal(R.f.cmd[1].kind, URT_CTRL_SET_PAYLOAD);
   assert_true(R.f.cmd[1].value == 1.5 && R.f.cmd[1].pose[1] == 0.01 && R.f.cmd[1].pose[2] == 0.05);
+  assert_true(R.f.cmd[1].t == 0.5);  // the transition time rides along
   sr_must(&R, "set_tool_voltage(12)\n");
   assert_int_equal(R.f.cmd[2].kind, URT_CTRL_SET_TOOL_VOLTAGE);
   assert_true(R.f.cmd[2].value == 12);
