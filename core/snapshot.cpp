@@ -99,6 +99,7 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
     s->i_actual[j] = d->i_fb[j];
     s->i_control[j] = d->i_ref[j];
     s->tau[j] = d->t_cs[j];
+    s->tau_from_current[j] = d->i_fb[j] * kt * ratio;  // what UR's actual_current_as_torque is
     s->v_actual[j] = d->v_sup[j];
     s->temperature[j] = c->temperature[j];
     s->joint_mode[j] = joint_mode(c->robot_mode);
@@ -205,6 +206,7 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   }
   // the payload the physics carries (the controller's payload_mass/cog are the same values)
   s->payload_mass = d->live.payload.mass;
+  std::memcpy(s->gravity_target, c->gravity, sizeof s->gravity_target);
   s->tool_voltage = c->tool_voltage;
   std::memcpy(s->payload_cog, d->live.payload.cog, sizeof s->payload_cog);
   std::memcpy(s->payload_inertia, d->live.payload.inertia, sizeof s->payload_inertia);

@@ -170,8 +170,32 @@ static int register_name(const char *name, size_t len, const char *dir, const ur
 static const uint8_t k_family_type[5] = {URT_RTDE_INT32, URT_RTDE_DOUBLE, URT_RTDE_BOOL,
                                          URT_RTDE_UINT32, URT_RTDE_UINT32};
 
+/* Outputs UR documents that urtwin has no model for and would have to send as a stand-in zero:
+ * refused at setup as an unknown name is (NOT_FOUND), so that a client never takes a zero for
+ * a value. None is in the default recipes of ur_rtde 1.6.5, URCL 2.14.0, the ROS 2 driver or
+ * UR's RTDE examples (URCL lists them only in its exhaustive recipe, whose test ignores unknown
+ * names); net/rtde/README.md lists them, and those still sent as zero because such a recipe
+ * asks for them. */
+static const char *const k_unmodelled[] = {
+    "io_current", "script_control_line", "actual_current_window", "collision_detection_ratio",
+    "actual_TCP_acceleration", "target_TCP_acceleration", "actual_robot_energy_consumed",
+    "actual_robot_braking_energy_dissipated", "time_scale_source", "target_base_acceleration",
+    "target_base_wrench"};
+
+int urt_rtde_output_unmodelled(const char *name, size_t len) {
+  for (size_t k = 0; k < sizeof k_unmodelled / sizeof k_unmodelled[0]; k++) {
+    if (name_eq(name, len, k_unmodelled[k])) {
+      return 1;
+    }
+  }
+  return 0;
+}
+
 int urt_rtde_output_lookup(const char *name, size_t len, const urt_version_t *v,
                            urt_rtde_field_t *f) {
+  if (urt_rtde_output_unmodelled(name, len)) {
+    return URT_EINVAL;
+  }
   // fixed names
   for (int i = 0; i < NOUT; i++) {
     if (name_eq(name, len, k_outputs[i].name)) {
@@ -224,7 +248,6 @@ int urt_rtde_input_lookup(const char *name, size_t len, const urt_version_t *v,
 //---- values the snapshot does not carry directly ----
 
 static const double k_zero6[6] = {0};
-static const double k_gravity[3] = {0.0, 0.0, -9.82};  /* base frame, upright mounting */
 #define MISSING_D 0.0
 #define MISSING_U 0u
 #define MISSING_I 0

@@ -230,10 +230,11 @@ int main(void) {
   // Under ThreadSanitizer a step costs ~100x its release time, so the tests that need the
   // physics to keep wall-clock or 5 s deadlines cannot pass; the race check is what the TSan
   // run is for, and these two drive the physics thread, the rings and the snapshot readers.
-  puts("core/loop under ThreadSanitizer: only the free-paced tests (timing tests need release speed)");
+  puts("core/loop under ThreadSanitizer: only the free-paced and one-tick tests (timing tests need release speed)");
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_loop__refuses_fractional_period),
       cmocka_unit_test(test_loop__commands_reach_the_controller),
+      cmocka_unit_test(test_loop__each_ring_counts_its_own_drops),  // one granted tick
   };
 #else
   const struct CMUnitTest tests[] = {

@@ -33,6 +33,8 @@ typedef struct urt_snapshot {
   double i_actual[URT_NJ];    /* measured motor current                     [A]       */
   double i_control[URT_NJ];   /* current reference of the PI cascade        [A]       */
   double tau[URT_NJ];         /* joint output torque T_CS                   [N m]     */
+  double tau_from_current[URT_NJ]; /* the measured current as joint torque, i·k_t·N [N m] */
+  double gravity_target[3];   /* the controller's gravity (set_gravity), base [m/s²]   */
   double v_actual[URT_NJ];    /* motor voltage                              [V]       */
   double temperature[URT_NJ]; /* motor winding temperature                  [°C]      */
   int32_t joint_mode[URT_NJ]; /* URT_JOINT_MODE_*                                      */

@@ -91,6 +91,9 @@ static int setup(void **state) {
 
 static int teardown(void **state) {
   fixture_t *f = *state;
+  if (!f) {
+    return 0;  // setup failed (e.g. a port in use): nothing to free, no crash on top
+  }
   urt_emulator_destroy(f->emu);
   urt_loop_destroy(f->loop);
   urt_model_free(f->m);

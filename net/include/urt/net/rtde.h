@@ -81,9 +81,14 @@ typedef struct urt_rtde_field {
 } urt_rtde_field_t;
 
 /* Resolve an output name for the emulated version. Returns 0 and fills *f, or URT_EINVAL when
- * UR's controller of that version would answer NOT_FOUND. Context: any (setup only; linear). */
+ * UR's controller of that version would answer NOT_FOUND, or when urtwin has no model for the
+ * output (urt_rtde_output_unmodelled): refused rather than sent as a stand-in zero.
+ * Context: any (setup only; linear). */
 int urt_rtde_output_lookup(const char *name, size_t len, const urt_version_t *v,
                            urt_rtde_field_t *f);
+
+/* 1 when UR documents the output but urtwin has no model for it (net/rtde/README.md). */
+int urt_rtde_output_unmodelled(const char *name, size_t len);
 
 /* Resolve an input name likewise (f->var is the input variable id < urt_rtde_input_count()). */
 int urt_rtde_input_lookup(const char *name, size_t len, const urt_version_t *v,
