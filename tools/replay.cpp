@@ -60,6 +60,21 @@ void setpoint_at(const ReplayRecording &r, size_t *cursor, double t, double q[UR
   }
 }
 
+// Whether the arm stands at time t: all six recorded target_qd are 0 at the sample at or
+// before t and, between two samples, at the next one too.
+bool arm_holds(const ReplayRecording &r, size_t i, double t) {
+  size_t n = r.t.size();
+  for (int j = 0; j < URT_NJ; j++) {
+    if (r.target_qd[i][(size_t)j] != 0.0) {
+      return false;
+    }
+    if (i + 1 < n && t > r.t[i] && r.target_qd[i + 1][(size_t)j] != 0.0) {
+      return false;
+    }
+  }
+  return true;
+}
+
 struct Moments {
   double n = 0, sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, see = 0;
   void add(double x, double y) {  // x model, y measured
@@ -215,6 +230,20 @@ int replay_run(const urt_model_t *m, const ReplayRecording &rec, ReplayResult *r
     cmd.kind = URT_CTRL_SETPOINT;
     cmd.id = (uint64_t)k + 1;
     setpoint_at(fed, &cursor, t0 + (double)(k + 1) * T, cmd.q, cmd.qd, cmd.pose);
+    // A standing arm: UR's controller sets each cycle's target_q to the joint position it
+    // measured the cycle before (the shared recordings: in every sample where all six
+    // target_qd are 0, target_q equals the previous sample's actual_q to the logged digit), so
+    // its drives never hold a position error that stiction leaves, and their speed integrators
+    // do not wind up against one. The recorded target_q there is the real robot's position,
+    // not a set-point for the twin; the twin gets its own measured position instead, the
+    // previous tick's, as the real drive does.
+    if (arm_holds(fed, cursor, t0 + (double)(k + 1) * T)) {
+      for (int j = 0; j < URT_NJ; j++) {
+        cmd.q[j] = d.q_fb[j];
+        cmd.qd[j] = 0.0;
+        cmd.pose[j] = 0.0;
+      }
+    }
     urt_ctrl_apply(m, &c, &d, &cmd);
     urt_ctrl_tick(m, &c, &d);
     if (c.safety_mode != URT_SAFETY_MODE_NORMAL) {

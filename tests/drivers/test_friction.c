@@ -75,6 +75,46 @@ static void test_friction_cbrt__is_within_one_ulp_of_cbrtl(void **state) {
   assert_true(isnan(urt__friction_cbrt(NAN)));
 }
 
+// A mass J under a constant torque F, from rest with z = 0, by linearly implicit Euler on
+// (q̇, z): the joint's displacement after t_end and its speed over the last half.
+static void hold_under_load(double F, double t_end, double *q_end, double *q_half,
+                            double *z_end) {
+  const double J = 0.05, h = 1e-6;  // [kg m²] about a wrist's output inertia; [s]
+  double q = 0.0, qd = 0.0, z = 0.0;
+  long n = lround(t_end / h);
+  for (long k = 0; k < n; k++) {
+    urt_friction_out_t o = urt_friction_eval(&kWrist, &(urt_friction_state_t){z}, qd);
+    double f1 = (F - o.t_f) / J, f2 = o.dz;
+    double a11 = 1.0 + h * kWrist.sigma1 * o.ddz_dqd / J;
+    double a12 = h * (kWrist.sigma0 + kWrist.sigma1 * o.ddz_dz) / J;
+    double a21 = -h * o.ddz_dqd, a22 = 1.0 - h * o.ddz_dz;
+    double det = a11 * a22 - a12 * a21;
+    double d1 = h * (a22 * f1 - a12 * f2) / det, d2 = h * (a11 * f2 - a21 * f1) / det;
+    qd += d1;
+    z += d2;
+    q += h * qd;
+    if (k == n / 2) {
+      *q_half = q;
+    }
+  }
+  *q_end = q;
+  *z_end = z;
+}
+
+// Presliding is elastic: a load below the breakaway level g(0) deflects the bristles to
+// z = F/σ0 and the joint stops there, with no drift (ż = q̇ (1 − F/g) → 0 with q̇); above it the
+// joint slides. The standstill creep seen in replays is not in the friction law.
+static void test_friction__below_breakaway_a_constant_load_sticks_without_drift(void **state) {
+  (void)state;
+  double g0 = urt_friction_g(&kWrist, 0.0), q_end, q_half, z_end;
+  hold_under_load(0.9 * g0, 1.0, &q_end, &q_half, &z_end);
+  assert_near(z_end, 0.9 * g0 / kWrist.sigma0, 1e-12);
+  assert_true(fabs(q_end) < 1e-4);            // a presliding deflection, not a slide
+  assert_true(fabs(q_end - q_half) < 1e-12);  // [rad] over the last 0.5 s: < 2e-12 rad/s
+  hold_under_load(1.1 * g0, 0.2, &q_end, &q_half, &z_end);
+  assert_true(fabs(q_end - q_half) > 1e-3);   // above breakaway it slides
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_friction_g__is_even_and_finite_for_negative_speed),
@@ -83,6 +123,7 @@ int main(void) {
       cmocka_unit_test(test_friction_dg__stribeck_dip_is_about_minus_3_7),
       cmocka_unit_test(test_friction__disabled_is_zero),
       cmocka_unit_test(test_friction_cbrt__is_within_one_ulp_of_cbrtl),
+      cmocka_unit_test(test_friction__below_breakaway_a_constant_load_sticks_without_drift),
   };
   return cmocka_run_group_tests_name("drivers/friction", tests, NULL, NULL);
 }

@@ -135,6 +135,30 @@ def test_replay__gaps_are_filled_not_fed_as_jumps(tmp_path):
         assert err_gap < 0.3 * err_held, (j, err_gap, err_held)
 
 
+def test_replay__a_standing_arm_holds_its_own_position_as_urs_controller_does(tmp_path):
+    # After the move the recording's target_q is, as UR's controller writes it, the real robot's
+    # own measured position: here 3 mrad off on the shoulder (the handover jump of no4_acc.csv)
+    # and 30 µrad, a stiction-held error, on elbow and wrist 1. Fed as a set-point, the first
+    # is a position step (an ~11 A spike) and the others wind the speed integrators up against
+    # the friction (a creeping current). The twin, holding its own measured position, stays flat.
+    t = np.round(np.arange(0.0, 3.0 + 1e-9, 0.008), 6)
+    q, qd, qdd = motion(t)
+    hold = t >= 0.7
+    q[hold] += np.array([0.0, 3e-3, -30e-6, 30e-6, 0.0, 0.0])
+    rec = write_recording(tmp_path / "h.csv", t, {"target_q": q, "target_qd": qd,
+                                                  "target_qdd": qdd,
+                                                  "actual_current": np.zeros((len(t), NJ))})
+    sim("--replay", rec, "--out", tmp_path / "h.txt", "--quiet")
+    tr = read_trace(tmp_path / "h.txt")
+    ts = tr["timestamp"]
+    early, late = (ts >= 1.0) & (ts < 1.5), ts >= 2.5
+    for j in range(NJ):
+        i = tr[f"twin_current_{j}"]
+        assert np.ptp(i[ts >= 0.7]) < 1.0, (j, np.ptp(i[ts >= 0.7]))  # no spike at the handover
+        drift = abs(i[late].mean() - i[early].mean())
+        assert drift <= 0.05, (j, drift)  # no creep: the standstill margin
+
+
 def test_replay__summary_has_null_ur_error_without_target_current(tmp_path):
     t = np.round(np.arange(0.0, 0.3, 0.008), 6)
     q, qd, _ = motion(t)
