@@ -47,6 +47,7 @@ import urt_surrogate as sur  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 NJ = 6
 MOVE_RANGE = 0.05       # [rad] a joint "moves" in a file beyond this range (issue 10)
+V_MIN = 0.02            # [rad/s] samples of a moving joint slower than this are not fitted
 COM_BOUND = 0.05        # [m] CoM corrections within ± this of the paper's
 COM_PRIOR = 0.02        # [m] scale of the weak pull towards the paper's CoM
 PRIOR_WEIGHT = 0.03     # weight of that pull, relative to one normalised current RMS
@@ -185,6 +186,11 @@ class FitData:
         self.i_meas = rec["actual_current"]
         self.y = arm.regressor(q, qd, qdd)
         self.moving = (q.max(axis=0) - q.min(axis=0)) > MOVE_RANGE
+        # Near a reversal the set-point's sign of q̇ leads the joint's, and the friction there
+        # (a jump of 2 f_c within µrad of bristle travel) is the twin's dynamics, not the
+        # surrogate's steady law: those samples of a moving joint are left out of the fit.
+        # A joint that never moves in the file keeps all its samples (gravity and offset).
+        self.weight = np.where((np.abs(qd) >= V_MIN) | ~self.moving, 1.0, 0.0)
 
 
 def predict(spec, x, params, arm, drives, fd):
@@ -202,13 +208,13 @@ def fit(files, params, arm, drives, payload_keys, max_iter, quiet=False):
     spec = Spec(params, moving, payload_keys)
     scale = np.sqrt(np.mean(np.concatenate([fd.i_meas for fd in files]) ** 2, axis=0))
     scale = np.maximum(scale, 0.05)
-    n_res = sum(fd.i_meas.size for fd in files)
+    n_res = sum(fd.weight.sum() for fd in files)
     x_paper = spec.x0.copy()
     prior_w = PRIOR_WEIGHT * np.sqrt(n_res / NJ)
 
     def residuals(x):
-        parts = [((predict(spec, x, params, arm, drives, fd) - fd.i_meas) / scale).ravel()
-                 for fd in files]
+        parts = [(fd.weight * (predict(spec, x, params, arm, drives, fd) - fd.i_meas) /
+                  scale).ravel() for fd in files]
         parts.append(prior_w * (x[spec.prior] - x_paper[spec.prior]) / COM_PRIOR)
         return np.concatenate(parts)
 
@@ -223,7 +229,8 @@ def fit(files, params, arm, drives, payload_keys, max_iter, quiet=False):
                   f"{np.sqrt(2 * cost / n_res):.4f}", flush=True)
 
     res = least_squares(residuals, spec.x0, bounds=(spec.lo, spec.hi), method="trf",
-                        x_scale="jac", max_nfev=max_iter, callback=progress)
+                        x_scale="jac", ftol=1e-10, xtol=1e-10, max_nfev=max_iter,
+                        callback=progress)
     per_joint = np.sqrt(np.mean(np.concatenate(
         [predict(spec, res.x, params, arm, drives, fd) - fd.i_meas for fd in files]) ** 2,
         axis=0))
