@@ -84,10 +84,36 @@ inline void body(const urt_arm_params_t& a, int i, Body& b) noexcept {
            J[4] - m * cx * cz,             J[5] - m * cy * cz};
 }
 
-inline void bodies(const urt_arm_params_t& a, Bodies& B) noexcept {
+inline bool has_load(const urt_payload_t& p) noexcept {
+  const double* J = p.inertia;
+  return p.mass != 0.0 || J[0] != 0.0 || J[1] != 0.0 || J[2] != 0.0 || J[3] != 0.0 ||
+         J[4] != 0.0 || J[5] != 0.0;
+}
+
+// Link 6 with the payload rigidly attached: masses, first moments and inertias about the frame
+// origin add (the CoG is in the flange frame, which is link 6's DH frame). Without a payload the
+// body is left as it is, so that a run without one keeps its bits.
+inline void add_load(const urt_payload_t& p, Body& b) noexcept {
+  if (!has_load(p)) {
+    return;
+  }
+  const double m = p.mass, cx = p.cog[0], cy = p.cog[1], cz = p.cog[2];
+  const double* J = p.inertia;
+  b.m += m;
+  b.h += V3{m * cx, m * cy, m * cz};
+  b.I_o.xx += J[0] + m * (cy * cy + cz * cz);
+  b.I_o.yy += J[1] + m * (cx * cx + cz * cz);
+  b.I_o.zz += J[2] + m * (cx * cx + cy * cy);
+  b.I_o.xy += J[3] - m * cx * cy;
+  b.I_o.xz += J[4] - m * cx * cz;
+  b.I_o.yz += J[5] - m * cy * cz;
+}
+
+inline void bodies(const urt_arm_params_t& a, const urt_payload_t& load, Bodies& B) noexcept {
   for (int i = 0; i < URT_NJ; ++i) {
     body(a, i, B.b[i]);
   }
+  add_load(load, B.b[URT_NJ - 1]);
 }
 
 // Pose of the TCP in the flange frame (row-major 3×4 of tcp_fixed).
@@ -327,21 +353,22 @@ bool cholesky_solve(Mat6& M, Vec6& x) noexcept {
 
 }  // namespace detail
 
-void rnea(const urt_arm_params_t& a, const ArmKinematics& k, const Vec6& qd, const Vec6& qdd,
-          Vec6& tau) noexcept {
+void rnea(const urt_arm_params_t& a, const urt_payload_t& load, const ArmKinematics& k,
+          const Vec6& qd, const Vec6& qdd, Vec6& tau) noexcept {
   detail::Bodies B;
-  detail::bodies(a, B);
+  detail::bodies(a, load, B);
   detail::rnea(a, B, k, qd, qdd, tau);
 }
 
-void rnea(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, const Vec6& qdd,
-          Vec6& tau) noexcept {
+void rnea(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q, const Vec6& qd,
+          const Vec6& qdd, Vec6& tau) noexcept {
   ArmKinematics k;
   arm_kinematics(a, q, k);
-  rnea(a, k, qd, qdd, tau);
+  rnea(a, load, k, qd, qdd, tau);
 }
 
-void gravity(const urt_arm_params_t& a, const Vec6& q, Vec6& g) noexcept {
+void gravity(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q,
+             Vec6& g) noexcept {
   using detail::V3;
   ArmKinematics k;
   arm_kinematics(a, q, k);
@@ -355,6 +382,11 @@ void gravity(const urt_arm_params_t& a, const Vec6& q, Vec6& g) noexcept {
     f[i] = l.mass * dv;
     n[i] = detail::cross(V3{l.com[0], l.com[1], l.com[2]}, f[i]);
   }
+  if (load.mass != 0.0) {  // the payload's weight at its CoG (its inertia needs no motion here)
+    const V3 f_p = load.mass * dv;
+    f[URT_NJ - 1] += f_p;
+    n[URT_NJ - 1] += detail::cross(V3{load.cog[0], load.cog[1], load.cog[2]}, f_p);
+  }
   for (int i = URT_NJ - 1; i >= 0; --i) {
     const double* F = a.fixed[i];  // the motion subspace as in detail::body
     const V3 s = {F[8], F[9], F[10]}, sv = {F[3] * F[4], F[3] * F[5], F[3] * F[6]};
@@ -367,38 +399,40 @@ void gravity(const urt_arm_params_t& a, const Vec6& q, Vec6& g) noexcept {
   }
 }
 
-void crba(const urt_arm_params_t& a, const ArmKinematics& k, Mat6& M) noexcept {
+void crba(const urt_arm_params_t& a, const urt_payload_t& load, const ArmKinematics& k,
+          Mat6& M) noexcept {
   detail::Bodies B;
-  detail::bodies(a, B);
+  detail::bodies(a, load, B);
   detail::crba(B, k, M);
 }
 
-void crba(const urt_arm_params_t& a, const Vec6& q, Mat6& M) noexcept {
+void crba(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q,
+          Mat6& M) noexcept {
   ArmKinematics k;
   arm_kinematics(a, q, k);
-  crba(a, k, M);
+  crba(a, load, k, M);
 }
 
-void mass_and_bias(const urt_arm_params_t& a, const ArmKinematics& k, const Vec6& qd, Mat6& M,
-                   Vec6& bias) noexcept {
+void mass_and_bias(const urt_arm_params_t& a, const urt_payload_t& load, const ArmKinematics& k,
+                   const Vec6& qd, Mat6& M, Vec6& bias) noexcept {
   detail::Bodies B;
-  detail::bodies(a, B);
+  detail::bodies(a, load, B);
   detail::crba(B, k, M);
   detail::rnea(a, B, k, qd, Vec6::Zero(), bias);
 }
 
-void mass_and_bias(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, Mat6& M,
-                   Vec6& bias) noexcept {
+void mass_and_bias(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q,
+                   const Vec6& qd, Mat6& M, Vec6& bias) noexcept {
   ArmKinematics k;
   arm_kinematics(a, q, k);
-  mass_and_bias(a, k, qd, M, bias);
+  mass_and_bias(a, load, k, qd, M, bias);
 }
 
-bool forward_dynamics(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, const Vec6& tau,
-                      Vec6& qdd) noexcept {
+bool forward_dynamics(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q,
+                      const Vec6& qd, const Vec6& tau, Vec6& qdd) noexcept {
   Mat6 M;
   Vec6 bias;
-  mass_and_bias(a, q, qd, M, bias);
+  mass_and_bias(a, load, q, qd, M, bias);
   qdd = tau - bias;
   if (!detail::cholesky_solve(M, qdd)) {
     qdd.setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -407,12 +441,13 @@ bool forward_dynamics(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, 
   return true;
 }
 
-double energy(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd) noexcept {
+double energy(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q,
+              const Vec6& qd) noexcept {
   using namespace detail;
   ArmKinematics k;
   arm_kinematics(a, q, k);
   Bodies B;
-  bodies(a, B);
+  bodies(a, load, B);
   const V3 g = {a.gravity[0], a.gravity[1], a.gravity[2]};
 
   // kinetic ½ vᵀ I v per body from the body velocities (equal to ½ qdᵀ M qd, without forming
@@ -559,19 +594,19 @@ void urt_arm_jacobian(const urt_model_t* m, const double q[URT_NJ], double J[36]
 void urt_arm_rnea(const urt_model_t* m, const double q[URT_NJ], const double qd[URT_NJ],
                   const double qdd[URT_NJ], double tau[URT_NJ]) {
   Vec6 t;
-  urt::core::rnea(m->arm, vec6(q), vec6(qd), vec6(qdd), t);
+  urt::core::rnea(m->arm, m->payload, vec6(q), vec6(qd), vec6(qdd), t);
   Eigen::Map<Vec6>{tau} = t;
 }
 
 void urt_arm_mass_matrix(const urt_model_t* m, const double q[URT_NJ], double M[36]) {
   Mat6 Mc;
-  urt::core::crba(m->arm, vec6(q), Mc);
+  urt::core::crba(m->arm, m->payload, vec6(q), Mc);
   Eigen::Map<RowMat6>{M} = Mc;
 }
 
 void urt_arm_gravity(const urt_model_t* m, const double q[URT_NJ], double g[URT_NJ]) {
   Vec6 t;
-  urt::core::gravity(m->arm, vec6(q), t);
+  urt::core::gravity(m->arm, m->payload, vec6(q), t);
   Eigen::Map<Vec6>{g} = t;
 }
 
@@ -579,12 +614,12 @@ void urt_arm_forward_dynamics(const urt_model_t* m, const double q[URT_NJ],
                               const double qd[URT_NJ], const double tau[URT_NJ],
                               double qdd[URT_NJ]) {
   Vec6 a;
-  urt::core::forward_dynamics(m->arm, vec6(q), vec6(qd), vec6(tau), a);
+  urt::core::forward_dynamics(m->arm, m->payload, vec6(q), vec6(qd), vec6(tau), a);
   Eigen::Map<Vec6>{qdd} = a;
 }
 
 double urt_arm_energy(const urt_model_t* m, const double q[URT_NJ], const double qd[URT_NJ]) {
-  return urt::core::energy(m->arm, vec6(q), vec6(qd));
+  return urt::core::energy(m->arm, m->payload, vec6(q), vec6(qd));
 }
 
 }  // extern "C"

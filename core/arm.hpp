@@ -65,34 +65,42 @@ void point_jacobian(const Vec3 z[URT_NJ], const Vec3 o[URT_NJ], const Vec3& p, M
 // the base frame: τ = Jᵀ w, frozen over a step. All zero (no Jacobian) when w is zero.
 void wrench_torque(const urt_arm_params_t& a, const Vec6& q, const double w[6], Vec6& tau) noexcept;
 
+// The dynamics below take the payload link 6 carries (`load`, in the flange frame) beside the
+// arm: the arm's parameters are the model's and constant, the payload is the run's
+// (urt_data_t.live.payload; the C API urt_arm_* uses the model's, urt_model_t.payload). It is
+// added to link 6's body; an all-zero payload leaves every result bit for bit as without one.
+
 // Inverse dynamics with gravity: tau = M(q) qdd + C(q, qd) qd + g(q) [N m].
-void rnea(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, const Vec6& qdd,
-          Vec6& tau) noexcept;
-void rnea(const urt_arm_params_t& a, const ArmKinematics& k, const Vec6& qd, const Vec6& qdd,
-          Vec6& tau) noexcept;
+void rnea(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q, const Vec6& qd,
+          const Vec6& qdd, Vec6& tau) noexcept;
+void rnea(const urt_arm_params_t& a, const urt_payload_t& load, const ArmKinematics& k,
+          const Vec6& qd, const Vec6& qdd, Vec6& tau) noexcept;
 
 // Gravity torque g(q) [N m] (RNEA without the velocity and acceleration terms).
-void gravity(const urt_arm_params_t& a, const Vec6& q, Vec6& g) noexcept;
+void gravity(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q,
+             Vec6& g) noexcept;
 
 // Joint-space mass matrix M(q) by CRBA [kg m²]. Both triangles are written.
-void crba(const urt_arm_params_t& a, const Vec6& q, Mat6& M) noexcept;
-void crba(const urt_arm_params_t& a, const ArmKinematics& k, Mat6& M) noexcept;
+void crba(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q, Mat6& M) noexcept;
+void crba(const urt_arm_params_t& a, const urt_payload_t& load, const ArmKinematics& k,
+          Mat6& M) noexcept;
 
 // M(q) and the bias torque b = C(q, qd) qd + g(q) from one set of link transforms: what a
 // step needs to form qdd = M⁻¹ (tau − b).
-void mass_and_bias(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, Mat6& M,
-                   Vec6& bias) noexcept;
-void mass_and_bias(const urt_arm_params_t& a, const ArmKinematics& k, const Vec6& qd, Mat6& M,
-                   Vec6& bias) noexcept;
+void mass_and_bias(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q,
+                   const Vec6& qd, Mat6& M, Vec6& bias) noexcept;
+void mass_and_bias(const urt_arm_params_t& a, const urt_payload_t& load, const ArmKinematics& k,
+                   const Vec6& qd, Mat6& M, Vec6& bias) noexcept;
 
 // Forward dynamics qdd = M⁻¹ (tau − C qd − g) by Cholesky of M. Returns false (qdd NaN) if M
 // is not positive definite, which only corrupt parameters can cause.
-bool forward_dynamics(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd, const Vec6& tau,
-                      Vec6& qdd) noexcept;
+bool forward_dynamics(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q,
+                      const Vec6& qd, const Vec6& tau, Vec6& qdd) noexcept;
 
 // Kinetic energy ½ qdᵀ M qd plus potential energy −Σ m_i g·p_com_i (zero at the base
 // origin) [J].
-double energy(const urt_arm_params_t& a, const Vec6& q, const Vec6& qd) noexcept;
+double energy(const urt_arm_params_t& a, const urt_payload_t& load, const Vec6& q,
+              const Vec6& qd) noexcept;
 
 // Rotation ↔ axis-angle rotation vector (UR convention, angle in [0, π]).
 Mat3 rotation_from_rotvec(const Vec3& r) noexcept;

@@ -21,8 +21,11 @@
 //   speed_scaling per second, and speed_scaling follows the slider at most 2 /s. servoj, speedj,
 //   speedl and stops are not scaled.
 // - HALT decelerates like stopj(4 rad/s²); it does not change program_state (the runner does).
-// - The payload is stored (snapshot), not added to the dynamics: the physics (urt_step) has no
-//   payload either, so a feed-forward with it would only create a model mismatch.
+// - SET_PAYLOAD mounts the payload on link 6 (urt_data_set_payload): the physics, the CVODE
+//   reference and the controller's model (feed-forward, target current, TCP force, freedrive)
+//   all read d->live.payload, so the twin carries what the program says it carries. A payload
+//   outside urt_payload_invalid()'s bounds (over 5 kg, CoG beyond 1 m, a non-physical inertia)
+//   is refused. A transition time is not modelled: the change is at once.
 // - PAUSE multiplies the slider's scaling by a pause factor that slews to 0 at 4 /s (RESUME: back
 //   to 1), so movej/movel (and a movej waiting behind a stop) slow down along their path, hold,
 //   and continue; streamed motions (servoj/l/c, speedj/l, direct, torque, freedrive, force) stop
@@ -266,9 +269,9 @@ int urt_ctrl_init(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, doub
   Vec6 q = actual_q(d);
   hold_at(c, q);
   Vec6 g;
-  gravity(m->arm, q, g);
+  gravity(m->arm, d->live.payload, q, g);
   put6(g, c->tau_bias);
-  model_torque(m, c, c->q1, c->qd1, c->qdd1, c->tau_model1);
+  model_torque(m, c, d->live.payload, c->q1, c->qd1, c->qdd1, c->tau_model1);
   std::memcpy(c->tau_model0, c->tau_model1, sizeof c->tau_model0);
   for (int j = 0; j < URT_NJ; j++) {
     c->temperature[j] = m->thermal[j].t_amb;
@@ -316,14 +319,22 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         std::memcpy(c->tcp_offset, cmd->pose, sizeof c->tcp_offset);
       }
       break;
-    case URT_CTRL_SET_PAYLOAD:
-      if (!(cmd->value >= 0.0) || !std::isfinite(cmd->value) || !all_finite(cmd->pose, 3)) {
+    case URT_CTRL_SET_PAYLOAD: {
+      // mounted from this tick boundary on: the physics' next step and this tick's feed-forward
+      // (tau_model1; tau_model0 still carries the old payload, so the feed-forward moves over
+      // one period, as a real controller's does within its cycle)
+      urt_payload_t p = {};
+      p.mass = cmd->value;
+      std::memcpy(p.cog, cmd->pose, sizeof p.cog);
+      std::memcpy(p.inertia, cmd->tau, sizeof p.inertia);
+      if (urt_data_set_payload(m, d, &p) != URT_OK) {
         c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
       } else {
-        c->payload_mass = cmd->value;
-        std::memcpy(c->payload_cog, cmd->pose, sizeof c->payload_cog);
+        c->payload_mass = p.mass;
+        std::memcpy(c->payload_cog, p.cog, sizeof c->payload_cog);
       }
       break;
+    }
     case URT_CTRL_POWER_ON:
       if (c->robot_mode == URT_ROBOT_MODE_POWER_OFF) {
         c->robot_mode = URT_ROBOT_MODE_IDLE;
@@ -344,7 +355,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         urt_pstop_reset(m, d);
         c->safety_mode = URT_SAFETY_MODE_NORMAL;
         hold_at(c, actual_q(d));
-        model_torque(m, c, c->q1, c->qd1, c->qdd1, c->tau_model1);
+        model_torque(m, c, d->live.payload, c->q1, c->qd1, c->qdd1, c->tau_model1);
         std::memcpy(c->tau_model0, c->tau_model1, sizeof c->tau_model0);
       }
       break;
@@ -486,7 +497,7 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
       std::memset(c->tau_model0, 0, sizeof c->tau_model0);
     } else {
       hold_at(c, vec6(c->q0));
-      model_torque(m, c, c->q1, c->qd1, c->qdd1, c->tau_model1);
+      model_torque(m, c, d->live.payload, c->q1, c->qd1, c->qdd1, c->tau_model1);
     }
     return;
   }
@@ -511,7 +522,7 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
     c->torque_mask_last = 0;
     return;
   }
-  model_torque(m, c, c->q1, c->qd1, c->qdd1, c->tau_model1);
+  model_torque(m, c, d->live.payload, c->q1, c->qd1, c->qdd1, c->tau_model1);
 
   // torque-controlled joints take c->tau_ff alone; a joint back from torque control starts
   // its period on the model feed-forward (not on the zero it carried)

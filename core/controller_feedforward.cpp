@@ -23,15 +23,16 @@ constexpr double kFrictionVEps = 2e-3;  // speed over which the friction feed-fo
 }  // namespace
 
 // inverse dynamics of the controller's arm model: the model's, with the controller's gravity
-void ctrl_rnea(const urt_model_t* m, const urt_ctrl_t* c, const Vec6& q, const Vec6& qd,
-               const Vec6& qdd, Vec6& tau) noexcept {
+// and the mounted payload
+void ctrl_rnea(const urt_model_t* m, const urt_ctrl_t* c, const urt_payload_t& load,
+               const Vec6& q, const Vec6& qd, const Vec6& qdd, Vec6& tau) noexcept {
   if (std::memcmp(c->gravity, m->arm.gravity, sizeof c->gravity) == 0) {
-    rnea(m->arm, q, qd, qdd, tau);
+    rnea(m->arm, load, q, qd, qdd, tau);
     return;
   }
   urt_arm_params_t a = m->arm;
   std::memcpy(a.gravity, c->gravity, sizeof a.gravity);
-  rnea(a, q, qd, qdd, tau);
+  rnea(a, load, q, qd, qdd, tau);
 }
 
 // steady-state LuGre friction (σ0 z = g(q̇) sign q̇), faded in over a small speed
@@ -43,10 +44,10 @@ double friction_ff(const urt_model_t* m, int j, double qd) noexcept {
 }
 
 // the model feed-forward at a set-point
-void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const double* q, const double* qd,
-                  const double* qdd, double* tau) noexcept {
+void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const urt_payload_t& load,
+                  const double* q, const double* qd, const double* qdd, double* tau) noexcept {
   Vec6 t;
-  ctrl_rnea(m, c, vec6(q), vec6(qd), vec6(qdd), t);
+  ctrl_rnea(m, c, load, vec6(q), vec6(qd), vec6(qdd), t);
   for (int j = 0; j < URT_NJ; j++) {
     tau[j] = t[j] + friction_ff(m, j, qd[j]) - c->tau_bias[j];
   }

@@ -195,7 +195,7 @@ void macro_rates(const urt_model_t* m, const urt_data_t* d, const int* sub, doub
       q[j] = x[j][URT_X_Q];
       qd[j] = x[j][URT_X_QD];
     }
-    mass_and_bias(m->arm, q, qd, mass, h0);
+    mass_and_bias(m->arm, d->live.payload, q, qd, mass, h0);
   }
   Vec6 qdd;
   arm_accel(sub, tau, qdd_pres, mass, h0, qdd);
@@ -206,7 +206,8 @@ void macro_rates(const urt_model_t* m, const urt_data_t* d, const int* sub, doub
 
 // Adds γh B_q̇ + (γh)² B_q to the W matrix of the arm rows and returns B_q (the q rows enter
 // the right-hand side too: k_q = r_q + γh k_q̇). Sub-stepped joints keep identity rows.
-void arm_linearisation(const urt_model_t* m, const int* sub, const double (*x)[URT_NXJ],
+void arm_linearisation(const urt_model_t* m, const urt_payload_t& load, const int* sub,
+                       const double (*x)[URT_NXJ],
                        const double (*f)[URT_NXJ], Mat6& bq, Mat6& wmat, double gh) noexcept {
   Vec6 q, qd, a, t0, t1;
   for (int j = 0; j < URT_NJ; j++) {
@@ -215,16 +216,16 @@ void arm_linearisation(const urt_model_t* m, const int* sub, const double (*x)[U
     a[j] = f[j][URT_X_QD];
   }
   Mat6 bqd;
-  rnea(m->arm, q, qd, a, t0);
+  rnea(m->arm, load, q, qd, a, t0);
   for (int c = 0; c < URT_NJ; c++) {
     double eq = 1e-7 * (1.0 + std::fabs(q[c])), ev = 1e-7 * (1.0 + std::fabs(qd[c]));
     Vec6 qp = q;
     qp[c] += eq;
-    rnea(m->arm, qp, qd, a, t1);
+    rnea(m->arm, load, qp, qd, a, t1);
     bq.col(c) = (t1 - t0) / eq;
     Vec6 qdp = qd;
     qdp[c] += ev;
-    rnea(m->arm, q, qdp, a, t1);
+    rnea(m->arm, load, q, qdp, a, t1);
     bqd.col(c) = (t1 - t0) / ev;
   }
   for (int j = 0; j < URT_NJ; j++) {
@@ -320,7 +321,7 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
       q[j] = x[j][URT_X_Q];
       qd[j] = x[j][URT_X_QD];
     }
-    mass_and_bias(m->arm, q, qd, mass_n, h_n);
+    mass_and_bias(m->arm, d->live.payload, q, qd, mass_n, h_n);
   }
   // sub-stepped joints first, on the arm frozen at t_n: their inertia M_pp and bias
   // (Coriolis, gravity, and the other joints' accelerations through M_pk)
@@ -382,7 +383,7 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
   // (energy drift 1.7e-4 → 8e-6 over a 10 s free swing). Finite differences of RNEA: 12 calls.
   Mat6 bq = Mat6::Zero();
   if (!m->drives_engaged) {
-    arm_linearisation(m, sub, x, f, bq, wmat, gh);
+    arm_linearisation(m, d->live.payload, sub, x, f, bq, wmat, gh);
   }
   Eigen::PartialPivLU<Mat6> wfac(wmat);
 

@@ -588,6 +588,18 @@ void load_arm(const Field &f, urt_arm_params_t *arm) {
   }
 }
 
+// The payload mounted at start: what urt_payload_invalid() accepts, each bound at its own key
+// first (so the error names the key), then the tensor as a whole.
+void load_payload(const Field &f, urt_payload_t *p) {
+  Map s = f.map({"mass", "cog", "inertia"});
+  p->mass = s["mass"].number(in(0.0, URT_PAYLOAD_MASS_MAX));
+  s["cog"].numbers(p->cog, 3, in(-URT_PAYLOAD_COG_MAX, URT_PAYLOAD_COG_MAX));
+  s["inertia"].numbers(p->inertia, 6, in(-URT_PAYLOAD_INERTIA_MAX, URT_PAYLOAD_INERTIA_MAX));
+  if (const char *why = urt_payload_invalid(p)) {
+    s["inertia"].fail(why);
+  }
+}
+
 void load_gear(const Field &f, urt_harmonic_drive_params_t *g) {
   Map s = f.map({"z_fs", "z_cs", "r_g", "alpha_t", "k_wg", "k_b", "k_fs", "k_m", "k_cs", "j_wg",
                  "j_fs", "j_cs", "zeta"});
@@ -749,8 +761,8 @@ void load_thermal(const Field &f, urt_thermal_params_t th[2]) {
 void load_model(const Origin &origin, const YAML::Node &root, urt_model_t *m) {
   int root_line = root.Mark().line >= 0 ? root.Mark().line + 1 : 1;
   Field doc(&origin, root, "", root_line);
-  Map top = doc.map({"name", "simulation", "supply", "arm", "gear_sizes", "friction_common",
-                     "sensors", "thermal", "joints"});
+  Map top = doc.map({"name", "simulation", "supply", "arm", "payload", "gear_sizes",
+                     "friction_common", "sensors", "thermal", "joints"});
 
   std::string name = top["name"].name(sizeof m->name - 1);
   std::snprintf(m->name, sizeof m->name, "%s", name.c_str());
@@ -760,6 +772,7 @@ void load_model(const Origin &origin, const YAML::Node &root, urt_model_t *m) {
   double v_net = supply["v_net"].number(in_lo_open(0.0, 1000.0));
 
   load_arm(top["arm"], &m->arm);
+  load_payload(top["payload"], &m->payload);
 
   Map sizes = top["gear_sizes"].map({"A", "B"});
   urt_harmonic_drive_params_t gear[2] = {};

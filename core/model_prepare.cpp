@@ -34,7 +34,11 @@ double friction_slope_min(const urt_friction_params_t* fp) {
 }
 
 // Smallest arm inertia a joint sees, over a few configurations (wrist inertias barely vary).
+// Without a payload: one only adds a positive semi-definite term to M, so the bare arm's
+// bound holds for any payload a run mounts, and the sub-stepping chosen from it stays safe
+// without recomputing these tables when the payload changes.
 double output_inertia_min(const urt_model_t* m, int j) {
+  const urt_payload_t none = {};
   double lo = INFINITY;
   for (int k = 0; k < 64; k++) {
     Eigen::Matrix<double, 6, 1> q;
@@ -42,7 +46,7 @@ double output_inertia_min(const urt_model_t* m, int j) {
       q[i] = std::sin(1.7 * k + 2.3 * i) * M_PI;  // deterministic spread over the range
     }
     Eigen::Matrix<double, 6, 6> mass;
-    crba(m->arm, q, mass);
+    crba(m->arm, none, q, mass);
     lo = std::fmin(lo, mass(j, j));
   }
   return lo + m->gear[j].j_cs;

@@ -342,6 +342,14 @@ void print_arm(Emitter &e, const urt_arm_params_t *a) {
   e.end_map();
 }
 
+void print_payload(Emitter &e, const urt_payload_t *p) {
+  e.begin_map("payload");
+  e.num("mass", p->mass, "kg");
+  e.nums("cog", p->cog, 3, "m, flange frame");
+  e.nums("inertia", p->inertia, 6, "kg m^2 about the CoG; Ixx Iyy Izz Ixy Ixz Iyz");
+  e.end_map();
+}
+
 void print_joint(Emitter &e, const urt_model_t *m, int j) {
   const urt_joint_params_t *jp = &m->joint[j];
   char size[2] = {jp->size, '\0'};
@@ -461,6 +469,7 @@ extern "C" void urt_model_print(const urt_model_t *m, FILE *f, int json) {
     urt::core::print_simulation(e, m);
     urt::core::print_integrator(e, m);
     urt::core::print_arm(e, &m->arm);
+    urt::core::print_payload(e, &m->payload);
     e.begin_list("joints");
     for (int j = 0; j < URT_NJ; j++) {
       urt::core::print_joint(e, m, j);

@@ -47,7 +47,7 @@ uint32_t tick(const MotionEnv& e) {
   const Vec6 q = actual_q(d);
   follow_actual(m, c, d, kAllJoints);
   Vec6 tau;
-  ctrl_rnea(m, c, q, Vec6::Zero(), Vec6::Zero(), tau);
+  ctrl_rnea(m, c, d->live.payload, q, Vec6::Zero(), Vec6::Zero(), tau);
 
   bool held = false;
   for (int i = 0; i < 6; i++) {

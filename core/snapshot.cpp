@@ -79,7 +79,7 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
     qd_true[j] = d->x[j][URT_X_QD];
   }
   Vec6 id_target;
-  rnea(m->arm, vec6(c->q1), vec6(c->qd1), vec6(c->qdd1), id_target);
+  rnea(m->arm, d->live.payload, vec6(c->q1), vec6(c->qd1), vec6(c->qdd1), id_target);
   for (int j = 0; j < URT_NJ; j++) {
     const double ratio = m->gear[j].ratio, kt = m->motor[j].kt;
     s->q_target[j] = c->q1[j];
@@ -131,7 +131,7 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   // wrench from the joint-torque residual
   {
     Vec6 id;
-    rnea(m->arm, q_true, qd_true, vec6(d->qdd), id);
+    rnea(m->arm, d->live.payload, q_true, qd_true, vec6(d->qdd), id);
     Vec6 r;
     for (int j = 0; j < URT_NJ; j++) {
       r[j] = id[j] - (d->t_cs[j] - d->t_f[j]);
@@ -194,11 +194,20 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
         P[k] += l.mass * (cp - cm) / (2.0 * h);
       }
     }
+    const urt_payload_t& load = d->live.payload;  // Tp, Tm are the flange's frames now
+    for (int k = 0; k < 3 && load.mass != 0.0; k++) {
+      const double* c3 = load.cog;
+      double cp = Tp[4 * k] * c3[0] + Tp[4 * k + 1] * c3[1] + Tp[4 * k + 2] * c3[2] + Tp[4 * k + 3];
+      double cm = Tm[4 * k] * c3[0] + Tm[4 * k + 1] * c3[1] + Tm[4 * k + 2] * c3[2] + Tm[4 * k + 3];
+      P[k] += load.mass * (cp - cm) / (2.0 * h);
+    }
     s->momentum = P.norm();
   }
-  s->payload_mass = c->payload_mass;
+  // the payload the physics carries (the controller's payload_mass/cog are the same values)
+  s->payload_mass = d->live.payload.mass;
   s->tool_voltage = c->tool_voltage;
-  std::memcpy(s->payload_cog, c->payload_cog, sizeof s->payload_cog);
+  std::memcpy(s->payload_cog, d->live.payload.cog, sizeof s->payload_cog);
+  std::memcpy(s->payload_inertia, d->live.payload.inertia, sizeof s->payload_inertia);
 
   // power
   const double v_bus = m->control[0].v_net;

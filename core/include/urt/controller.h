@@ -99,7 +99,9 @@ typedef enum urt_ctrl_cmd_kind {
   URT_CTRL_SET_ANALOG_OUT,    /* index 0..1, value [0..1]                                   */
   URT_CTRL_SET_SPEED_SLIDER,  /* value [0..1]                                               */
   URT_CTRL_SET_TCP,           /* pose[6]                                                    */
-  URT_CTRL_SET_PAYLOAD,       /* value = mass [kg], pose[0..2] = CoG [m]                    */
+  URT_CTRL_SET_PAYLOAD,       /* value = mass [kg], pose[0..2] = CoG [m] (flange frame),
+                                 tau[0..5] = inertia about the CoG, Ixx Iyy Izz Ixy Ixz Iyz
+                                 [kg m²]: mounted on link 6 at this tick (urt_data_set_payload) */
   /* robot state machine */
   URT_CTRL_POWER_ON,
   URT_CTRL_POWER_OFF,

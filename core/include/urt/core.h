@@ -50,6 +50,11 @@ void urt_model_print(const urt_model_t *m, FILE *f, int json);
  * Returns 0 or URT_ESOLVER. */
 int urt_data_init(const urt_model_t *m, urt_data_t *d, const double *q);
 
+/* Mount a payload on link 6 from the next step on (urt_step, urt_rhs and the controller's
+ * model all read d->live.payload). A payload urt_payload_invalid() refuses is not installed.
+ * Context: RT (the controller calls it at a tick boundary). Returns 0 or URT_EINVAL. */
+int urt_data_set_payload(const urt_model_t *m, urt_data_t *d, const urt_payload_t *p);
+
 /* Validate and install a joint command. A command with NaN/Inf, positions outside the joint
  * limits, speeds above qd_max, accelerations above qdd_max or torques above torque_max is
  * refused: the previous set-point is held (frozen at the current measured position, zero

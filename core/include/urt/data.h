@@ -64,6 +64,14 @@ typedef struct urt_command {
   uint32_t torque_mask;    /* bit j: joint j in torque mode (0: all position-controlled) */
 } urt_command_t;
 
+/* Model parameters that change while the robot runs: the physics reads them from here, not from
+ * the const model. urt_data_init copies them from the model; a change is a value the
+ * controller installs between two controller ticks (urt_data_set_*), so the physics steps of
+ * one period all see the same parameters and the next period the new ones. */
+typedef struct urt_live_params {
+  urt_payload_t payload;             /* what link 6 carries (set_payload, set_target_payload) */
+} urt_live_params_t;
+
 typedef struct urt_data {
   /* state — advanced by the integrator */
   double t;                          /* simulation time                [s]    */
@@ -96,6 +104,10 @@ typedef struct urt_data {
   uint32_t isat_count, vsat_count;   /* steps that began with a saturated loop (a torque-mode
                                       * joint counts in isat_count: i_ref is held)  */
   uint32_t refined_count;            /* steps redone as sub-steps (urt_step)    */
+
+  /* parameters — the model's values that a run may change (last: the layout before them is
+   * the one the recorded controller hashes fold) */
+  urt_live_params_t live;
 } urt_data_t;
 
 #ifdef __cplusplus

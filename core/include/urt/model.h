@@ -36,6 +36,24 @@ typedef struct urt_link_params {
   double inertia[6]; /* Ixx, Iyy, Izz, Ixy, Ixz, Iyz about the CoM [kg m²] */
 } urt_link_params_t;
 
+/* A payload on the flange, as UR's set_target_payload gives it: mass, centre of gravity in the
+ * tool flange frame (DH frame 6 here, the frame the TCP offset is given in), inertia about the
+ * CoG with axes parallel to the flange's. It is added to link 6's rigid body. All zero: none. */
+typedef struct urt_payload {
+  double mass;       /* [kg]  */
+  double cog[3];     /* CoG in the flange frame [m] */
+  double inertia[6]; /* Ixx, Iyy, Izz, Ixy, Ixz, Iyz about the CoG [kg m²] */
+} urt_payload_t;
+
+#define URT_PAYLOAD_MASS_MAX 5.0  /* UR5 rated payload [kg] */
+#define URT_PAYLOAD_COG_MAX 1.0   /* |CoG component| bound: within a metre of the flange [m] */
+#define URT_PAYLOAD_INERTIA_MAX 1.0 /* |inertia element| bound [kg m²] */
+
+/* Why a payload is not physical, or NULL when it is: finite, 0 ≤ mass ≤ URT_PAYLOAD_MASS_MAX,
+ * |cog_i| ≤ URT_PAYLOAD_COG_MAX, |I_ij| ≤ URT_PAYLOAD_INERTIA_MAX and the inertia matrix
+ * positive semi-definite. The loader, the controller and URScript share it. Context: RT. */
+const char *urt_payload_invalid(const urt_payload_t *p);
+
 typedef struct urt_arm_params {
   urt_link_params_t link[URT_NJ];
   double gravity[3];       /* gravity in base frame 0 [m/s²] */
@@ -94,6 +112,8 @@ typedef struct urt_model {
 
   /* initial state */
   double q0[URT_NJ];       /* initial joint positions           [rad]  */
+  urt_payload_t payload;   /* payload mounted at start (urt_data_init copies it into
+                            * urt_data_t.live, where the run changes it)          */
 
   /* derived at load: integrator tables (precomputed W_d^-1 per active set), see integrator.h */
   struct urt_integrator_tables *tables;  /* owned; NULL until urt_model_prepare() */

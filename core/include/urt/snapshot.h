@@ -45,7 +45,8 @@ typedef struct urt_snapshot {
   double tool_accel[3];       /* tool accelerometer, tool frame             [m/s²]    */
   double elbow_pos[3], elbow_vel[3];  /* elbow joint: origin of DH frame 2 (on the axis of
                                        * joint 3, the elbow), base frame [m, m/s] */
-  double payload_mass, payload_cog[3];
+  double payload_mass, payload_cog[3];  /* the mounted payload: flange frame [kg, m] */
+  double payload_inertia[6];  /* its inertia about the CoG, Ixx Iyy Izz Ixy Ixz Iyz [kg m²] */
   double momentum;            /* norm of the arm's linear momentum Σ m v_CoM [kg m/s]  */
 
   /* power */
