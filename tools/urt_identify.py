@@ -50,6 +50,7 @@ MOVE_RANGE = 0.05       # [rad] a joint "moves" in a file beyond this range (iss
 V_MIN = 0.02            # [rad/s] samples of a moving joint slower than this are not fitted
 COM_BOUND = 0.05        # [m] CoM corrections within ± this of the paper's
 COM_PRIOR = 0.02        # [m] scale of the weak pull towards the paper's CoM
+PAYLOAD_PRIOR = 0.5     # [kg] its scale for the payload mass
 PRIOR_WEIGHT = 0.03     # weight of that pull, relative to one normalised current RMS
 FRICTION_NAMES = ("f_c", "f_v", "k_static", "qd_s", "asym")
 FIT_LINKS = (1, 2, 3, 4, 5)  # 0-based: upper arm … link 6
@@ -145,7 +146,11 @@ class Spec:
         # nudge starts off the bounds (least_squares needs them strictly inside)
         span = self.hi - self.lo
         self.x0 = np.clip(self.x0, self.lo + 1e-6 * span, self.hi - 1e-6 * span)
-        self.prior = [k for k, r in enumerate(self.rows) if r[0].startswith("arm.")]
+        # the weak pull towards the paper's robot: link CoMs and the payload (none)
+        self.prior = [k for k, r in enumerate(self.rows)
+                      if r[0].startswith("arm.") or r[0].startswith("payload.")]
+        self.prior_scale = np.array([PAYLOAD_PRIOR if self.rows[k][0] == "payload.mass"
+                                     else COM_PRIOR for k in self.prior])
 
     def unpack(self, x, params):
         js = params["joints"]
@@ -215,7 +220,7 @@ def fit(files, params, arm, drives, payload_keys, max_iter, quiet=False):
     def residuals(x):
         parts = [(fd.weight * (predict(spec, x, params, arm, drives, fd) - fd.i_meas) /
                   scale).ravel() for fd in files]
-        parts.append(prior_w * (x[spec.prior] - x_paper[spec.prior]) / COM_PRIOR)
+        parts.append(prior_w * (x[spec.prior] - x_paper[spec.prior]) / spec.prior_scale)
         return np.concatenate(parts)
 
     it = [0]
@@ -340,12 +345,50 @@ def replay_table(path, summary, moving, label):
 
 #---- main ----
 
+def fit_and_write(recs, out, a, argv, params, units, arm, drives):
+    files = [FitData(r, arm) for r in recs]
+    spec, res, per_joint = fit(files, params, arm, drives, "payload" in params, a.max_iter,
+                               a.quiet)
+    name = a.name or Path(out).stem
+    keys = write_overlay(out, name, a.config, argv, spec, res, per_joint, units, recs, params)
+    print(f"wrote {out}: {len(keys)} keys; surrogate RMS residual per joint [A]: "
+          + " ".join(f"{v:.3f}" for v in per_joint))
+    if not a.quiet:
+        for fd in files:
+            err = predict(spec, res.x, params, arm, drives, fd) - fd.i_meas
+            line = f"  {fd.name}: surrogate/UR RMS error per joint [A]:"
+            for j in range(NJ):
+                ur = (np.sqrt(np.mean((fd.rec["target_current"][:, j] - fd.i_meas[:, j]) ** 2))
+                      if fd.rec.has("target_current") else float("nan"))
+                line += f" {np.sqrt(np.mean(err[:, j] ** 2)):.3f}/{ur:.3f}"
+            print(line)
+
+
+def judge(h, overlay, config):
+    """Replay table of holdout h with the paper's parameters and with overlay; True when the
+    twin's RMS current error is at most UR's on every joint that moves."""
+    moving = (h["target_q"].max(axis=0) - h["target_q"].min(axis=0)) > MOVE_RANGE
+    base = replay(h.path, config=config)
+    fitted = replay(h.path, overlay=overlay, config=config)
+    ok = True
+    for label, s in (("paper parameters", base), (f"overlay {Path(overlay).name}", fitted)):
+        table, ok = replay_table(h.path, s, moving, label)
+        print(table, flush=True)
+    print(f"{h.path.name}: twin <= UR on every moving joint with the overlay: "
+          f"{'yes' if ok else 'NO'}", flush=True)
+    return ok
+
+
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     ap = argparse.ArgumentParser(prog="urt_identify.py", description=__doc__.split("\n")[0])
     ap.add_argument("files", nargs="+", help="recordings to fit (record.py layout)")
-    ap.add_argument("--out", required=True, help="overlay YAML to write")
+    ap.add_argument("--out", required=True,
+                    help="overlay YAML to write (with --leave-one-out: a directory)")
     ap.add_argument("--holdout", nargs="+", default=[], help="recordings to judge, not fitted")
+    ap.add_argument("--leave-one-out", action="store_true",
+                    help="fit on all FILES but one, judge that one, for each; --out is a "
+                         "directory for the overlays (without-STEM.yaml)")
     ap.add_argument("--config", default=str(ROOT / "config" / "ur5.yaml"))
     ap.add_argument("--name", default=None, help="overlay name (default: the file's stem)")
     ap.add_argument("--max-iter", type=int, default=60, help="function evaluations at most")
@@ -362,46 +405,34 @@ def main(argv=None):
         overlap = {r.path.resolve() for r in recs} & {h.path.resolve() for h in holdouts}
         if overlap:
             raise UsageError(f"{sorted(map(str, overlap))[0]}: in both FILES and --holdout")
+        if a.leave_one_out and (len(recs) < 2 or holdouts):
+            raise UsageError("--leave-one-out needs two or more FILES and no --holdout")
     except (rec_io.RecordingError, UsageError) as e:
         print(f"urt_identify: {e}", file=sys.stderr)
         return 2
 
-    arm, drives = sur.Arm(params), sur.Drives(params)
-    files = [FitData(r, arm) for r in recs]
-    payload_keys = "payload" in params
     global FIT_LINKS
     if a.no_arm:
         FIT_LINKS = ()
-    spec, res, per_joint = fit(files, params, arm, drives, payload_keys, a.max_iter, a.quiet)
-    name = a.name or Path(a.out).stem
-    keys = write_overlay(a.out, name, a.config, argv, spec, res, per_joint, units, recs, params)
-    print(f"wrote {a.out}: {len(keys)} keys; surrogate RMS residual per joint [A]: "
-          + " ".join(f"{v:.3f}" for v in per_joint))
-    if not a.quiet:
-        for fd in files:
-            err = predict(spec, res.x, params, arm, drives, fd) - fd.i_meas
-            line = f"  {fd.name}: surrogate/UR RMS error per joint [A]:"
-            for j in range(NJ):
-                ur = (np.sqrt(np.mean((fd.rec["target_current"][:, j] - fd.i_meas[:, j]) ** 2))
-                      if fd.rec.has("target_current") else float("nan"))
-                line += f" {np.sqrt(np.mean(err[:, j] ** 2)):.3f}/{ur:.3f}"
-            print(line)
-
-    status = 0
-    for h in holdouts:
-        moving = (h["target_q"].max(axis=0) - h["target_q"].min(axis=0)) > MOVE_RANGE
-        try:
-            base = replay(h.path, config=a.config)
-            fitted = replay(h.path, overlay=a.out, config=a.config)
-        except (RuntimeError, UsageError) as e:
-            print(f"urt_identify: {e}", file=sys.stderr)
-            return 1
-        for label, s in (("paper parameters", base), ("overlay", fitted)):
-            table, ok = replay_table(h.path, s, moving, label)
-            print(table)
-            if label == "overlay":
-                print(f"{h.path.name}: twin <= UR on every moving joint: {'yes' if ok else 'NO'}")
-    return status
+    arm, drives = sur.Arm(params), sur.Drives(params)
+    try:
+        if not a.leave_one_out:
+            fit_and_write(recs, a.out, a, argv, params, units, arm, drives)
+            for h in holdouts:
+                judge(h, a.out, a.config)
+            return 0
+        verdicts = []
+        for k, h in enumerate(recs):
+            out = Path(a.out) / f"without-{h.path.stem}.yaml"
+            print(f"== fold {k + 1}/{len(recs)}: fit without {h.path.name}", flush=True)
+            fit_and_write(recs[:k] + recs[k + 1:], out, a, argv, params, units, arm, drives)
+            verdicts.append((h.path.name, judge(h, out, a.config)))
+        for name, ok in verdicts:
+            print(f"leave-one-out {name}: {'pass' if ok else 'FAIL'}")
+        return 0
+    except (RuntimeError, UsageError) as e:
+        print(f"urt_identify: {e}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":
