@@ -347,8 +347,8 @@ def replay_table(path, summary, moving, label):
 
 def fit_and_write(recs, out, a, argv, params, units, arm, drives):
     files = [FitData(r, arm) for r in recs]
-    spec, res, per_joint = fit(files, params, arm, drives, "payload" in params, a.max_iter,
-                               a.quiet)
+    spec, res, per_joint = fit(files, params, arm, drives, "payload" in params and not a.no_arm,
+                               a.max_iter, a.quiet)
     name = a.name or Path(out).stem
     keys = write_overlay(out, name, a.config, argv, spec, res, per_joint, units, recs, params)
     print(f"wrote {out}: {len(keys)} keys; surrogate RMS residual per joint [A]: "
@@ -392,7 +392,8 @@ def main(argv=None):
     ap.add_argument("--config", default=str(ROOT / "config" / "ur5.yaml"))
     ap.add_argument("--name", default=None, help="overlay name (default: the file's stem)")
     ap.add_argument("--max-iter", type=int, default=60, help="function evaluations at most")
-    ap.add_argument("--no-arm", action="store_true", help="fit friction and offsets only")
+    ap.add_argument("--no-arm", action="store_true",
+                    help="fit friction and offsets only (no link CoMs, no payload)")
     ap.add_argument("--quiet", action="store_true")
     try:
         a = ap.parse_args(argv)
