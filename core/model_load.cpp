@@ -21,6 +21,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <initializer_list>
 #include <limits>
 #include <new>
@@ -29,6 +30,7 @@
 #include <utility>
 #include <vector>
 
+#include "model_units.hpp"
 #include "urt/core.h"
 
 namespace urt::core {
@@ -58,23 +60,33 @@ std::string join_index(const std::string &path, size_t i) {
   return path + "[" + std::to_string(i) + "]";
 }
 
-//---- where values came from: the file, or an override ----
+//---- where values came from: the file, an included file, an overlay, or an override ----
 
 class Origin {
  public:
-  explicit Origin(std::string file) : file_(std::move(file)) {}
+  explicit Origin(std::string file) : file_(std::move(file)), base_(file_) {}
 
+  // The file given on the command line (named by --set errors).
   const std::string &file() const { return file_; }
+  // The file the tree's own lines belong to: the innermost config an include chain starts at.
+  void set_base_file(const std::string &f) { base_ = f; }
 
   // Remember a key path an override replaced or created; everything at or below it is
   // reported as "override" rather than with a file line.
-  void add_override_path(const std::string &path) { overrides_.push_back(path); }
+  void add_override_path(const std::string &path) { sources_.push_back({path, file_, 0}); }
+  // Everything at or below path came from file, at line (an overlay entry, an included file's
+  // key): errors there name that file and line. The latest source of a path wins.
+  void add_source(const std::string &path, const std::string &file, int line) {
+    sources_.push_back({path, file, line > 0 ? line : 1});
+  }
 
   [[noreturn]] void fail(const std::string &path, int line, const std::string &reason) const {
-    std::string where = from_override(path) ? "override" : std::to_string(line > 0 ? line : 1);
+    std::string where = base_ + ":" + std::to_string(line > 0 ? line : 1);
+    if (const Source *s = source_of(path)) {
+      where = s->file + ":" + (s->line > 0 ? std::to_string(s->line) : std::string("override"));
+    }
     throw LoadError{URT_ECONFIG,
-                    file_ + ":" + where + ": " + (path.empty() ? "(document)" : path) + ": " +
-                        reason};
+                    where + ": " + (path.empty() ? "(document)" : path) + ": " + reason};
   }
 
   [[noreturn]] void fail_override(const std::string &key, const std::string &reason) const {
@@ -82,18 +94,25 @@ class Origin {
   }
 
  private:
-  bool from_override(const std::string &path) const {
-    for (const std::string &o : overrides_) {
-      if (path.compare(0, o.size(), o) == 0 &&
-          (path.size() == o.size() || path[o.size()] == '.' || path[o.size()] == '[')) {
-        return true;
+  struct Source {
+    std::string path, file;
+    int line;  // 0: an override
+  };
+
+  const Source *source_of(const std::string &path) const {
+    for (auto it = sources_.rbegin(); it != sources_.rend(); ++it) {
+      const std::string &o = it->path;
+      if (o.empty() || (path.compare(0, o.size(), o) == 0 &&
+                        (path.size() == o.size() || path[o.size()] == '.' ||
+                         path[o.size()] == '['))) {
+        return &*it;
       }
     }
-    return false;
+    return nullptr;
   }
 
-  std::string file_;
-  std::vector<std::string> overrides_;
+  std::string file_, base_;
+  std::vector<Source> sources_;
 };
 
 //---- allowed ranges of numbers ----
@@ -462,6 +481,55 @@ std::string trim(const std::string &s) {
   return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
 }
 
+// Set the value at a parsed key path in the tree. fail(at, reason) reports a path that does
+// not exist; mark(path) records where a replaced or created value came from.
+void set_path(YAML::Node root, const std::vector<PathPart> &parts, const YAML::Node &v,
+              const std::function<void(const std::string &, const std::string &)> &fail,
+              const std::function<void(const std::string &)> &mark) {
+  // walk to the parent; reset() rebinds the handle (operator= would overwrite the node)
+  YAML::Node cur;
+  cur.reset(root);
+  std::string path;
+  for (size_t k = 0; k < parts.size(); k++) {
+    const PathPart &p = parts[k];
+    bool last = k + 1 == parts.size();
+    if (p.is_index) {
+      std::string at = join_index(path, p.index);
+      if (!cur.IsSequence()) {
+        fail(at, path.empty() ? "the document is not a list" : path + " is not a list");
+      }
+      if (p.index >= cur.size()) {
+        fail(at, "index out of range (list has " + std::to_string(cur.size()) + " elements)");
+      }
+      path = at;
+      if (last) {
+        cur[p.index] = v;
+      } else {
+        YAML::Node next = cur[p.index];
+        cur.reset(next);
+      }
+    } else {
+      std::string at = join_key(path, p.key);
+      if (!cur.IsMap()) {
+        fail(at, (path.empty() ? std::string("the document") : path) + " is not a map");
+      }
+      path = at;
+      if (last) {
+        cur[p.key] = v;
+      } else {
+        // a missing intermediate map is created; validation then names what is wrong with it
+        if (!cur[p.key]) {
+          cur[p.key] = YAML::Node(YAML::NodeType::Map);
+          mark(path);
+        }
+        YAML::Node next = cur[p.key];
+        cur.reset(next);
+      }
+    }
+  }
+  mark(canonical_path(parts));
+}
+
 void apply_override(Origin *origin, YAML::Node root, const std::string &text) {
   size_t eq = text.find('=');
   if (eq == std::string::npos) {
@@ -483,52 +551,10 @@ void apply_override(Origin *origin, YAML::Node root, const std::string &text) {
   } catch (const YAML::Exception &e) {
     origin->fail_override(canonical, "invalid YAML value: " + e.msg);
   }
-
-  // walk to the parent; reset() rebinds the handle (operator= would overwrite the node)
-  YAML::Node cur;
-  cur.reset(root);
-  std::string path;
-  for (size_t k = 0; k < parts.size(); k++) {
-    const PathPart &p = parts[k];
-    bool last = k + 1 == parts.size();
-    if (p.is_index) {
-      std::string at = join_index(path, p.index);
-      if (!cur.IsSequence()) {
-        origin->fail_override(at, path.empty() ? "the document is not a list"
-                                               : path + " is not a list");
-      }
-      if (p.index >= cur.size()) {
-        origin->fail_override(at, "index out of range (list has " + std::to_string(cur.size()) +
-                                      " elements)");
-      }
-      path = at;
-      if (last) {
-        cur[p.index] = v;
-      } else {
-        YAML::Node next = cur[p.index];
-        cur.reset(next);
-      }
-    } else {
-      std::string at = join_key(path, p.key);
-      if (!cur.IsMap()) {
-        origin->fail_override(at, (path.empty() ? std::string("the document") : path) +
-                                      " is not a map");
-      }
-      path = at;
-      if (last) {
-        cur[p.key] = v;
-      } else {
-        // a missing intermediate map is created; validation then names what is wrong with it
-        if (!cur[p.key]) {
-          cur[p.key] = YAML::Node(YAML::NodeType::Map);
-          origin->add_override_path(path);
-        }
-        YAML::Node next = cur[p.key];
-        cur.reset(next);
-      }
-    }
-  }
-  origin->add_override_path(canonical);
+  set_path(
+      root, parts, v,
+      [origin](const std::string &at, const std::string &why) { origin->fail_override(at, why); },
+      [origin](const std::string &at) { origin->add_override_path(at); });
 }
 
 //---- the model: one function per section of the file ----
@@ -811,19 +837,300 @@ std::string read_file(const char *path) {
   return ss.str();
 }
 
-// Parse, override, validate and fill. Returns the filled (not yet prepared) model.
-urt_model_t *load(const char *path, const char *const *overrides) {
-  std::string text = read_file(path);
-  Origin origin(path);
+//---- overlays and includes ----
+//
+// An overlay (urt_model_load_overlays, `--overlay FILE`) is YAML with three top-level keys:
+//   overlay: {name: ..., base: ..., note: ...}   free-form provenance, not read
+//   include: PATH | [PATH, ...]                  overlays applied first, relative to this file
+//   set:                                         keys exactly as --set takes them
+//     joints.1.friction.f_c: {value: 7.2, unit: "N m", from: [a.csv], residual: 0.12}
+//     payload.mass: 0.3                          a bare value is allowed too
+// Each entry goes through the same tree walk as an override, so an unknown key or a value out
+// of range is refused by validation, named "overlayfile:line: key: reason". `unit`, when given,
+// must be the key's unit (model_units.cpp); `from` and `residual` are provenance, checked for
+// type and otherwise ignored.
+//
+// A config file may start from others: `include: PATH | [PATH, ...]` (relative to it). Each
+// included config is deep-merged over the ones before it (maps merge key by key; a scalar or a
+// list replaces), an included overlay is applied where it stands, and the file's own keys go
+// on top. Values keep the file and line they came from for error messages.
 
-  YAML::Node root;
+constexpr int kMaxIncludeDepth = 16;
+
+int line_of(const YAML::Node &n) { return n.Mark().line >= 0 ? n.Mark().line + 1 : 1; }
+
+[[noreturn]] void fail_at(const std::string &file, int line, const std::string &key,
+                          const std::string &reason) {
+  throw LoadError{URT_ECONFIG, file + ":" + std::to_string(line) + ": " + key + ": " + reason};
+}
+
+// A path in an include: relative to the including file's directory unless absolute.
+std::string resolve_relative(const std::string &from_file, const std::string &p) {
+  if (!p.empty() && p[0] == '/') {
+    return p;
+  }
+  size_t slash = from_file.rfind('/');
+  return slash == std::string::npos ? p : from_file.substr(0, slash + 1) + p;
+}
+
+YAML::Node parse_file(const std::string &path) {
+  std::string text = read_file(path.c_str());
   try {
-    root = YAML::Load(text);
+    return YAML::Load(text);
   } catch (const YAML::ParserException &e) {
-    throw LoadError{URT_ECONFIG, origin.file() + ":" + std::to_string(e.mark.line + 1) +
-                                    ": syntax error: " + e.msg};
+    throw LoadError{URT_ECONFIG,
+                    path + ":" + std::to_string(e.mark.line + 1) + ": syntax error: " + e.msg};
+  }
+}
+
+bool is_overlay(const YAML::Node &doc) { return doc.IsMap() && (doc["set"] || doc["overlay"]); }
+
+// "joints.1.friction.f_c" → "joints[].friction.f_c", the key of the unit table
+std::string generic_path(const std::vector<PathPart> &parts) {
+  std::string out;
+  for (const PathPart &p : parts) {
+    out = p.is_index ? out + "[]" : join_key(out, p.key);
+  }
+  return out;
+}
+
+// A stated unit equals the key's, or the key's before its "; " remark ("kg m^2; Ixx ...").
+bool unit_matches(const std::string &given, const char *unit) {
+  std::string u = unit;
+  return given == u || given == u.substr(0, u.find("; "));
+}
+
+// The paths of an include: a path or a list of paths (strings).
+std::vector<std::pair<std::string, int>> include_paths(const std::string &file,
+                                                       const YAML::Node &inc, int key_line) {
+  std::vector<std::pair<std::string, int>> out;
+  auto one = [&](const YAML::Node &n) {
+    if (!n.IsScalar() || n.Scalar().empty()) {
+      fail_at(file, line_of(n), "include", "must be a path or a list of paths");
+    }
+    out.emplace_back(resolve_relative(file, n.Scalar()), line_of(n));
+  };
+  if (inc.IsSequence()) {
+    for (size_t i = 0; i < inc.size(); i++) {
+      one(inc[i]);
+    }
+  } else if (inc.IsScalar()) {
+    one(inc);
+  } else {
+    fail_at(file, key_line, "include", "must be a path or a list of paths");
+  }
+  return out;
+}
+
+struct LoadContext {
+  Origin *origin;
+  bool base_set = false;
+  // a unit stated for a path the table does not know: decided after validation, which names
+  // an unknown key first
+  struct PendingUnit {
+    std::string file, key;
+    int line;
+  };
+  std::vector<PendingUnit> pending_units;
+};
+
+void apply_overlay_doc(LoadContext *cx, YAML::Node root, const YAML::Node &doc,
+                       const std::string &file, int depth);
+
+void apply_overlay_entry(LoadContext *cx, YAML::Node root, const std::string &file,
+                         const YAML::Node &k, const YAML::Node &entry) {
+  int line = line_of(k);
+  if (!k.IsScalar()) {
+    fail_at(file, line, "set", "keys must be strings");
+  }
+  const std::string key = k.Scalar();
+  std::vector<PathPart> parts;
+  if (!parse_key_path(key, &parts)) {
+    fail_at(file, line, key, "malformed key (write a.b.c, list elements as a.1.b or a[1].b)");
+  }
+  std::string canonical = canonical_path(parts);
+
+  // {value: v, unit: u, from: [...], residual: r}, or the bare value
+  YAML::Node value;
+  value.reset(entry);
+  std::string unit;
+  bool has_unit = false;
+  if (entry.IsMap() && entry["value"]) {
+    for (auto it = entry.begin(); it != entry.end(); ++it) {
+      YAML::Node ek = it->first;
+      YAML::Node ev = it->second;
+      std::string name = ek.IsScalar() ? ek.Scalar() : std::string();
+      std::string at = canonical + "." + name;
+      if (name == "value") {
+        value.reset(ev);  // rebind: operator= would overwrite the entry map
+      } else if (name == "unit") {
+        if (!ev.IsScalar()) {
+          fail_at(file, line_of(ek), at, "must be a unit, e.g. \"N m\"");
+        }
+        unit = ev.Scalar();
+        has_unit = true;
+      } else if (name == "from") {
+        bool ok = ev.IsScalar() || ev.IsSequence();
+        for (size_t i = 0; ev.IsSequence() && i < ev.size(); i++) {
+          ok = ok && ev[i].IsScalar();
+        }
+        if (!ok) {
+          fail_at(file, line_of(ek), at, "must be a file name or a list of file names");
+        }
+      } else if (name == "residual") {
+        double r = 0.0;
+        if (!ev.IsScalar() || !parse_double(ev.Scalar(), &r) || !std::isfinite(r) || r < 0.0) {
+          fail_at(file, line_of(ek), at, "must be a finite number >= 0");
+        }
+      } else {
+        fail_at(file, line_of(ek), at, "unknown key (an entry has value, unit, from, residual)");
+      }
+    }
   }
 
+  if (has_unit) {
+    const char *u = config_unit(generic_path(parts));
+    if (!u) {
+      cx->pending_units.push_back({file, canonical, line});
+    } else if (!unit_matches(unit, u)) {
+      fail_at(file, line, canonical,
+              "unit \"" + unit + "\" does not match the key's unit \"" + u + "\"");
+    }
+  }
+
+  Origin *origin = cx->origin;
+  set_path(
+      root, parts, value,
+      [&](const std::string &at, const std::string &why) { fail_at(file, line, at, why); },
+      [&](const std::string &at) { origin->add_source(at, file, line); });
+}
+
+void apply_overlay_doc(LoadContext *cx, YAML::Node root, const YAML::Node &doc,
+                       const std::string &file, int depth) {
+  if (!doc.IsMap()) {
+    fail_at(file, line_of(doc), "(document)",
+            "an overlay must be a map of overlay, include and set");
+  }
+  // includes first, then this file's own set, whatever their order in the file
+  YAML::Node set;
+  for (auto it = doc.begin(); it != doc.end(); ++it) {
+    YAML::Node k = it->first;
+    YAML::Node v = it->second;
+    std::string name = k.IsScalar() ? k.Scalar() : std::string();
+    if (name == "overlay") {
+      if (!v.IsMap()) {
+        fail_at(file, line_of(k), name, "must be a map (free-form: name, base, tool, note)");
+      }
+    } else if (name == "include") {
+      if (depth >= kMaxIncludeDepth) {
+        fail_at(file, line_of(k), name,
+                "includes nested deeper than " + std::to_string(kMaxIncludeDepth) +
+                    " (a cycle?)");
+      }
+      for (const auto &[path, pline] : include_paths(file, v, line_of(k))) {
+        YAML::Node sub = parse_file(path);
+        if (!is_overlay(sub)) {
+          fail_at(file, pline, name, path + " is not an overlay (no set: or overlay: key)");
+        }
+        apply_overlay_doc(cx, root, sub, path, depth + 1);
+      }
+    } else if (name == "set") {
+      if (!v.IsMap()) {
+        fail_at(file, line_of(k), name, "must be a map of key: value");
+      }
+      set.reset(v);
+    } else {
+      fail_at(file, line_of(k), name.empty() ? "(key)" : name,
+              "unknown key (an overlay has overlay, include and set)");
+    }
+  }
+  if (set) {
+    for (auto it = set.begin(); it != set.end(); ++it) {
+      apply_overlay_entry(cx, root, file, it->first, it->second);
+    }
+  }
+}
+
+// src over dst: maps merge key by key, anything else replaces; every replaced value remembers
+// its file and line.
+void deep_merge(LoadContext *cx, YAML::Node dst, const YAML::Node &src, const std::string &path,
+                const std::string &file) {
+  for (auto it = src.begin(); it != src.end(); ++it) {
+    YAML::Node k = it->first;
+    YAML::Node v = it->second;
+    if (!k.IsScalar()) {
+      fail_at(file, line_of(k), path.empty() ? "(document)" : path, "keys must be strings");
+    }
+    std::string key = k.Scalar();
+    std::string at = join_key(path, key);
+    if (dst[key] && dst[key].IsMap() && v.IsMap()) {
+      deep_merge(cx, dst[key], v, at, file);
+    } else {
+      dst[key] = v;
+      cx->origin->add_source(at, file, line_of(k));
+    }
+  }
+}
+
+// A config document with its includes resolved.
+YAML::Node resolve_includes(LoadContext *cx, const std::string &file, YAML::Node doc, int depth) {
+  if (!doc.IsMap() || !doc["include"]) {
+    return doc;
+  }
+  int key_line = 1;
+  for (auto it = doc.begin(); it != doc.end(); ++it) {
+    if (it->first.IsScalar() && it->first.Scalar() == "include") {
+      key_line = line_of(it->first);
+    }
+  }
+  if (depth >= kMaxIncludeDepth) {
+    fail_at(file, key_line, "include",
+            "includes nested deeper than " + std::to_string(kMaxIncludeDepth) + " (a cycle?)");
+  }
+  YAML::Node tree;
+  bool have = false;
+  for (const auto &[path, pline] : include_paths(file, doc["include"], key_line)) {
+    YAML::Node sub = parse_file(path);
+    if (is_overlay(sub)) {
+      if (!have) {
+        fail_at(file, pline, "include", path + " is an overlay: include a config before it");
+      }
+      apply_overlay_doc(cx, tree, sub, path, depth + 1);
+      continue;
+    }
+    YAML::Node resolved = resolve_includes(cx, path, sub, depth + 1);
+    sub.reset(resolved);
+    if (!sub.IsMap()) {
+      fail_at(path, line_of(sub), "(document)", "must be a map");
+    }
+    if (!have) {
+      tree.reset(sub);
+      have = true;
+      if (!cx->base_set) {
+        cx->origin->set_base_file(path);  // the innermost config: its lines are the tree's own
+        cx->base_set = true;
+      }
+    } else {
+      deep_merge(cx, tree, sub, "", path);
+    }
+  }
+  doc.remove("include");
+  deep_merge(cx, tree, doc, "", file);
+  return tree;
+}
+
+// Parse, include, overlay, override, validate and fill. Returns the filled (not yet prepared)
+// model.
+urt_model_t *load(const char *path, const char *const *overlays, const char *const *overrides) {
+  Origin origin(path);
+  LoadContext cx{&origin, false, {}};
+  YAML::Node root;
+  root.reset(resolve_includes(&cx, path, parse_file(path), 0));
+
+  for (const char *const *o = overlays; o && *o; o++) {
+    YAML::Node doc = parse_file(*o);
+    apply_overlay_doc(&cx, root, doc, *o, 0);
+  }
   for (const char *const *o = overrides; o && *o; o++) {
     apply_override(&origin, root, *o);
   }
@@ -835,6 +1142,10 @@ urt_model_t *load(const char *path, const char *const *overrides) {
   }
   try {
     load_model(origin, root, m);
+    if (!cx.pending_units.empty()) {
+      const auto &p = cx.pending_units.front();
+      fail_at(p.file, p.line, p.key, "a unit is given, but the loader knows none for this key");
+    }
   } catch (...) {
     std::free(m);
     throw;
@@ -856,6 +1167,20 @@ void set_err(char *err, size_t err_sz, const std::string &msg) {
 
 extern "C" int urt_model_load(const char *path, const char *const *overrides, urt_model_t **out,
                               char *err, size_t err_sz) {
+  return urt_model_load_overlays(path, nullptr, overrides, out, err, err_sz);
+}
+
+extern "C" const char *urt_config_key_unit(const char *key) {
+  std::vector<urt::core::PathPart> parts;
+  if (!key || !urt::core::parse_key_path(key, &parts)) {
+    return nullptr;
+  }
+  return urt::core::config_unit(urt::core::generic_path(parts));
+}
+
+extern "C" int urt_model_load_overlays(const char *path, const char *const *overlays,
+                                       const char *const *overrides, urt_model_t **out,
+                                       char *err, size_t err_sz) {
   using urt::core::LoadError;
   using urt::core::set_err;
 
@@ -865,7 +1190,7 @@ extern "C" int urt_model_load(const char *path, const char *const *overrides, ur
   }
   urt_model_t *m = nullptr;
   try {
-    m = urt::core::load(path, overrides);
+    m = urt::core::load(path, overlays, overrides);
   } catch (const LoadError &e) {
     set_err(err, err_sz, e.msg);
     return e.code;

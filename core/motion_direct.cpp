@@ -2,6 +2,8 @@
 // core/motion_direct.cpp — external joint set-points (the LCM command channel): the set-point is
 // the command's q, q̇ (q̈ their change over the period), with its torque feed-forward; each
 // command is done in the period it is applied. Context: RT.
+#include <cmath>
+
 #include "motion.hpp"
 
 namespace urt::core {
@@ -16,6 +18,13 @@ uint32_t bad_target(const urt_model_t* m, const urt_ctrl_cmd_t& cmd) {
   if (!bad) {
     bad = torque_faults(m, cmd.tau);
   }
+  for (int j = 0; !bad && cmd.kind == URT_CTRL_SETPOINT && j < URT_NJ; j++) {
+    if (!std::isfinite(cmd.pose[j])) {
+      bad = URT_PSTOP_NONFINITE_CMD;
+    } else if (std::fabs(cmd.pose[j]) > m->joint[j].qdd_max) {
+      bad = URT_PSTOP_ACC_LIMIT;
+    }
+  }
   return bad;
 }
 
@@ -29,7 +38,8 @@ uint32_t tick(const MotionEnv& e) {
   std::memcpy(c->q1, c->active.q, sizeof c->q1);
   std::memcpy(c->qd1, c->active.qd, sizeof c->qd1);
   for (int j = 0; j < URT_NJ; j++) {
-    c->qdd1[j] = (c->qd1[j] - c->qd0[j]) / c->period;
+    c->qdd1[j] = c->active.kind == URT_CTRL_SETPOINT ? c->active.pose[j]
+                                                     : (c->qd1[j] - c->qd0[j]) / c->period;
   }
   mark_done(c, c->motion_id);
   return 0;

@@ -22,6 +22,7 @@ const Motion* motion_for_command(const urt_ctrl_cmd_t& cmd) noexcept {
     case URT_CTRL_STOPL:
       return &kStopMotion;
     case URT_CTRL_DIRECT:
+    case URT_CTRL_SETPOINT:
       return &kDirectMotion;
     case URT_CTRL_SERVOL:
       return &kServolMotion;

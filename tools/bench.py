@@ -9,6 +9,10 @@ in one run on the same machine; nothing here asserts a time (the machine is shar
 
     URT_BUILD=build .venv/bin/python tools/bench.py --out build/bench.json
 
+Then the replay speed: `urt_sim --replay` of an 80 s recording (../shared's no5_acc_slow.csv
+played forward and back to 80 s; a synthetic one without ../shared), three runs, the median of
+simulated seconds per wall second (target: at least 10; reported, never asserted).
+
 Pinocchio is only reachable through Python here, so ABA is reported three ways, labelled (the
 workloads are interleaved batch by batch, like the cases inside urt_bench):
   native     per-call cost of the C++ loop inside pin.abaInParallel (1 thread, a batch of
@@ -400,6 +404,81 @@ def run_vm_bench(build, ticks):
     return out
 
 
+# ../shared beside the checkout (or beside the worktrees' parent)
+SHARED_REC = next((p / "data" / "ur5-kufieta2014" / "no5_acc_slow.csv"
+                   for p in (ROOT.parent / "shared", ROOT.parents[1] / "shared")
+                   if (p / "data" / "ur5-kufieta2014" / "no5_acc_slow.csv").is_file()),
+                  ROOT.parent / "shared" / "data" / "ur5-kufieta2014" / "no5_acc_slow.csv")
+
+
+def long_recording(path, seconds, src=SHARED_REC):
+    """A recording of `seconds` in record.py's layout: src played forward, then backward in time
+    (q̇ negated), and so on; without src a smooth synthetic motion of every joint."""
+    import numpy as np
+    if src.is_file():
+        header = src.read_text().split("\n", 1)[0].split()
+        fwd = np.loadtxt(src, skiprows=1, ndmin=2)
+        dt = float(np.median(np.diff(fwd[:, 0])))
+        back = fwd[::-1].copy()
+        for i, name in enumerate(header):
+            if name.startswith(("target_qd_", "actual_qd_")):
+                back[:, i] = -back[:, i]
+        parts, n, k = [], 0, 0
+        need = int(round(seconds / dt)) + 1
+        while n < need:
+            part = fwd if k % 2 == 0 else back
+            parts.append(part[1:] if k else part)
+            n += len(parts[-1])
+            k += 1
+        data = np.vstack(parts)[:need]
+        data[:, 0] = np.round(np.arange(need) * dt, 6)
+        source = f"{src.name} forward and back"
+    else:
+        dt = 0.008
+        t = np.arange(0.0, seconds + 1e-9, dt)
+        q0 = np.array([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0])
+        w = 2 * np.pi * np.array([0.05, 0.07, 0.09, 0.11, 0.13, 0.15])
+        amp = np.array([1.0, 0.4, 0.5, 0.6, 0.6, 0.8])
+        q = q0 + amp * np.sin(np.outer(t, w))
+        qd = amp * w * np.cos(np.outer(t, w))
+        qdd = -amp * w**2 * np.sin(np.outer(t, w))
+        header = ["timestamp"] + [f"{c}_{j}" for c in ("target_q", "target_qd", "target_qdd",
+                                                        "actual_current") for j in range(6)]
+        data = np.hstack([t[:, None], q, qd, qdd, np.zeros_like(q)])
+        source = "synthetic sinusoids"
+    np.savetxt(path, data, fmt="%.9g", header=" ".join(header), comments="")
+    return source
+
+
+def run_replay_bench(build, config, quick):
+    """urt_sim --replay speed: simulated s per wall s, median of the runs."""
+    exe = Path(build) / "tools" / "urt_sim"
+    if not exe.exists():
+        return {"status": "skipped", "reason": f"{exe} not built"}
+    seconds, runs = (8.0, 1) if quick else (80.0, 3)
+    with tempfile.TemporaryDirectory() as tmp:
+        rec = Path(tmp) / "long.csv"
+        source = long_recording(rec, seconds)
+        speeds, walls = [], []
+        for k in range(runs):
+            out = Path(tmp) / f"summary{k}.json"
+            try:
+                proc = subprocess.run([str(exe), "--config", config, "--replay", str(rec),
+                                       "--summary-json", str(out), "--quiet"],
+                                      capture_output=True, text=True, cwd=ROOT, timeout=1800)
+                summary = json.loads(out.read_text())
+            except (OSError, subprocess.SubprocessError, ValueError) as e:
+                return {"status": "failed", "reason": str(e)}
+            if proc.returncode != 0:
+                return {"status": "failed", "reason": proc.stderr.strip()}
+            speeds.append(summary["speed"])
+            walls.append(summary["wall"])
+    speeds.sort()
+    return {"status": "ok", "recording": source, "duration_s": seconds, "runs": runs,
+            "speed_median": speeds[len(speeds) // 2], "speeds": speeds, "wall_s": walls,
+            "target": 10.0}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -433,6 +512,7 @@ def main(argv=None):
                         else bench_aba(args, build, res["urt_bench"]))
     res["ratios"] = ratios(res["urt_bench"], res["pinocchio"])
     res["urscript_vm"] = run_vm_bench(build, 2000 if args.quick else 20000)
+    res["replay"] = run_replay_bench(build, args.config, args.quick)
     res["machine"]["loadavg_end"] = list(os.getloadavg())
 
     out = Path(args.out)
@@ -442,6 +522,13 @@ def main(argv=None):
     for name, c in res["urscript_vm"].get("cases", {}).items():
         print(f"URScript VM per controller tick, {name}: median {c['median_us']:.2f} us, "
               f"p99 {c['p99_us']:.2f} us (of a {res['urscript_vm']['period_us']} us period)")
+    rp = res["replay"]
+    if rp["status"] == "ok":
+        print(f"urt_sim --replay, {rp['duration_s']:.0f} s recording ({rp['recording']}): "
+              f"median {rp['speed_median']:.1f} x real time over {rp['runs']} run(s) "
+              f"(target >= 10, not asserted)")
+    else:
+        print(f"urt_sim --replay: {rp['status']}: {rp.get('reason', '')}")
     print(f"wrote {out}")
     # the core is what is benchmarked: its failure fails `make bench`; MuJoCo/Pinocchio never do
     return 0 if res["urt_bench"]["urt"]["status"] == "ok" else 1

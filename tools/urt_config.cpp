@@ -21,7 +21,7 @@ namespace {
 
 void usage(FILE *f) {
   std::fputs(
-      "usage: urt_config [--json] [--set key=value]... [--check] FILE\n"
+      "usage: urt_config [--json] [--overlay FILE]... [--set key=value]... [--check] FILE\n"
       "Load and validate a robot parameter file (e.g. config/ur5.yaml) and print the fully\n"
       "resolved model, derived values included.\n"
       "  -p, --print            print the resolved model (the default)\n"
@@ -29,6 +29,8 @@ void usage(FILE *f) {
       "  -s, --set KEY=VALUE    override a key before validation; list elements by 0-based\n"
       "                         index: joints.1.motor.kt=0.14 or joints[1].motor.kt=0.14;\n"
       "                         VALUE is YAML: arm.gravity=[0,0,-9.8]. Repeatable.\n"
+      "  -o, --overlay FILE     apply an overlay (config/README.md) after FILE and before\n"
+      "                         --set. Repeatable, applied in order.\n"
       "  -c, --check            only validate; print \"FILE: ok\"\n"
       "  -h, --help             this text\n"
       "exit status: 0 ok, 1 usage error, 2 the model did not load (reason on stderr)\n",
@@ -43,15 +45,16 @@ int main(int argc, char **argv) {
       {"json", no_argument, nullptr, 'j'},
       {"set", required_argument, nullptr, 's'},
       {"check", no_argument, nullptr, 'c'},
+      {"overlay", required_argument, nullptr, 'o'},
       {"help", no_argument, nullptr, 'h'},
       {nullptr, 0, nullptr, 0},
   };
 
   // parse the command line
   bool json = false, check = false;
-  std::vector<const char *> overrides;
+  std::vector<const char *> overrides, overlays;
   int opt;
-  while ((opt = getopt_long(argc, argv, "pjs:ch", options, nullptr)) != -1) {
+  while ((opt = getopt_long(argc, argv, "pjs:co:h", options, nullptr)) != -1) {
     switch (opt) {
       case 'p':
         break;
@@ -63,6 +66,9 @@ int main(int argc, char **argv) {
         break;
       case 'c':
         check = true;
+        break;
+      case 'o':
+        overlays.push_back(optarg);
         break;
       case 'h':
         usage(stdout);
@@ -78,12 +84,13 @@ int main(int argc, char **argv) {
     return 1;
   }
   const char *path = argv[optind];
-  overrides.push_back(nullptr);  // the loader takes a NULL-terminated list
+  overrides.push_back(nullptr);  // the loader takes NULL-terminated lists
+  overlays.push_back(nullptr);
 
   // load, validate, prepare
   urt_model_t *m = nullptr;
   char err[1024];
-  int rc = urt_model_load(path, overrides.data(), &m, err, sizeof err);
+  int rc = urt_model_load_overlays(path, overlays.data(), overrides.data(), &m, err, sizeof err);
   if (rc != 0) {
     std::fprintf(stderr, "%s\n", err);
     return 2;

@@ -8,6 +8,8 @@
 //           [--duration S] [--rate HZ] [--reference [--rtol R] | --compare] [--decimate N]
 //           [--out FILE.csv] [--realtime] [--quiet]
 //   urt_sim [--config FILE] [--set KEY=VALUE]... --print-model [--json]
+//   urt_sim [--config FILE] [--overlay FILE]... [--set KEY=VALUE]... --replay REC.csv
+//           [--out TRACE] [--summary-json OUT] [--plot DIR] [--noise] [--quiet]
 //
 // Per step: evaluate the trajectory at t = d.t, install it with urt_command_set (q, q̇, q̈,
 // no torque feed-forward), write a CSV row of the state at t, then advance one step. Each row
@@ -21,6 +23,7 @@
 #include <signal.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cinttypes>
@@ -32,9 +35,16 @@
 #include <string>
 #include <vector>
 
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include "replay.h"
+#include "replay_csv.h"
 #include "traj.h"
 #include "urt/core.h"
 #include "urt/reference.h"
+
+extern "C" char **environ;
 
 namespace {
 
@@ -45,6 +55,11 @@ constexpr double kRad2Deg = 180.0 / 3.14159265358979323846;
 struct Options {
   std::string config = "config/ur5.yaml";
   std::vector<std::string> sets;   // --set KEY=VALUE, in order
+  std::vector<std::string> overlays;  // --overlay FILE, in order
+  std::string replay;              // --replay: a recording to play (tools/replay.h)
+  std::string summary_json;        // --summary-json
+  std::string plot_dir;            // --plot
+  bool noise = false;              // --noise: keep the sensor noise in a replay
   urt_traj_kind_t traj = URT_TRAJ_PICKPLACE;
   uint64_t seed = 1;
   double duration = -1.0;          // < 0: the trajectory's own duration
@@ -65,6 +80,8 @@ void usage(FILE *f) {
       "usage: urt_sim [options]\n"
       "Play a test trajectory through the UR5 model and write a CSV trace.\n"
       "  -c, --config FILE      robot parameter file (default config/ur5.yaml)\n"
+      "      --overlay FILE     apply an overlay (config/README.md) after the config and\n"
+      "                         before --set. Repeatable, applied in order.\n"
       "  -s, --set KEY=VALUE    override a config key, e.g. sensors.noise=false or\n"
       "                         joints.4.qdd_max=50 (0-based joint index). Repeatable.\n"
       "  -t, --traj KIND        excitation | pickplace (default) | hold\n"
@@ -89,6 +106,17 @@ void usage(FILE *f) {
       "      --json             with --print-model: JSON instead of YAML\n"
       "      --realtime         pace the loop to wall time; status line every second\n"
       "  -q, --quiet            no status lines or summary (the --compare table still prints)\n"
+      "      --replay FILE      play a recording (RTDE record.py layout: timestamp,\n"
+      "                         target_q_*, target_qd_*, actual_current_*; target_qdd_*,\n"
+      "                         target_current_*, actual_q_*, actual_qd_* used when there) as\n"
+      "                         the controller's set-point, from rest at its first pose, and\n"
+      "                         print per joint RMS(measured current), RMS(twin - measured),\n"
+      "                         RMS(target_current - measured), their ratios and\n"
+      "                         correlations. --out writes the twin beside the recording.\n"
+      "                         Sensor noise is off unless --noise.\n"
+      "      --summary-json OUT with --replay: the table as JSON\n"
+      "      --plot DIR         with --replay: per-joint PNGs (tools/plot_replay.py)\n"
+      "      --noise            with --replay: keep the sensor noise\n"
       "  -h, --help             this text\n"
       "CSV columns: t, per joint j = 1..6: q_set_j q_j qd_j qm_j qdm_j i_j i_meas_j v_j tcs_j\n"
       "tf_j, then tcp_x tcp_y tcp_z tcp_rx tcp_ry tcp_rz (SI units, %.17g).\n"
@@ -132,7 +160,12 @@ int parse_args(int argc, char **argv, Options *o) {
     OPT_DECIMATE,
     OPT_PRINT_MODEL,
     OPT_JSON,
-    OPT_REALTIME
+    OPT_REALTIME,
+    OPT_OVERLAY,
+    OPT_REPLAY,
+    OPT_SUMMARY_JSON,
+    OPT_PLOT,
+    OPT_NOISE
   };
   static const struct option options[] = {
       {"config", required_argument, nullptr, 'c'},
@@ -149,6 +182,11 @@ int parse_args(int argc, char **argv, Options *o) {
       {"print-model", no_argument, nullptr, OPT_PRINT_MODEL},
       {"json", no_argument, nullptr, OPT_JSON},
       {"realtime", no_argument, nullptr, OPT_REALTIME},
+      {"overlay", required_argument, nullptr, OPT_OVERLAY},
+      {"replay", required_argument, nullptr, OPT_REPLAY},
+      {"summary-json", required_argument, nullptr, OPT_SUMMARY_JSON},
+      {"plot", required_argument, nullptr, OPT_PLOT},
+      {"noise", no_argument, nullptr, OPT_NOISE},
       {"quiet", no_argument, nullptr, 'q'},
       {"help", no_argument, nullptr, 'h'},
       {nullptr, 0, nullptr, 0},
@@ -228,6 +266,21 @@ int parse_args(int argc, char **argv, Options *o) {
       case OPT_REALTIME:
         o->realtime = true;
         break;
+      case OPT_OVERLAY:
+        o->overlays.emplace_back(optarg);
+        break;
+      case OPT_REPLAY:
+        o->replay = optarg;
+        break;
+      case OPT_SUMMARY_JSON:
+        o->summary_json = optarg;
+        break;
+      case OPT_PLOT:
+        o->plot_dir = optarg;
+        break;
+      case OPT_NOISE:
+        o->noise = true;
+        break;
       case 'q':
         o->quiet = true;
         break;
@@ -253,6 +306,15 @@ int parse_args(int argc, char **argv, Options *o) {
   if (o->realtime && (o->reference || o->compare)) {
     std::fprintf(stderr, "urt_sim: CVODE runs far slower than real time: --realtime cannot be "
                          "combined with --reference or --compare\n");
+    return 2;
+  }
+  if (!o->replay.empty() && (o->compare || o->reference || o->realtime || o->print_model)) {
+    std::fprintf(stderr, "urt_sim: --replay runs the fixed-step model offline: drop --compare, "
+                         "--reference, --realtime and --print-model\n");
+    return 2;
+  }
+  if (o->replay.empty() && (!o->summary_json.empty() || !o->plot_dir.empty() || o->noise)) {
+    std::fprintf(stderr, "urt_sim: --summary-json, --plot and --noise go with --replay\n");
     return 2;
   }
   if (o->duration == 0.0 && !o->realtime) {
@@ -654,6 +716,67 @@ int run(const Options &o, const urt_model_t *m, const urt_traj_t *tr) {
   return status;
 }
 
+//---- --replay ----
+
+// tools/plot_replay.py with the project's venv (URT_PYTHON overrides); its exit status
+int run_plot(const std::string &trace, const std::string &dir) {
+  std::string py = std::getenv("URT_PYTHON") ? std::getenv("URT_PYTHON") : "";
+  if (py.empty()) {
+    std::string venv = std::string(URT_SOURCE_DIR) + "/.venv/bin/python";
+    py = access(venv.c_str(), X_OK) == 0 ? venv : "python3";
+  }
+  std::string script = std::string(URT_SOURCE_DIR) + "/tools/plot_replay.py";
+  std::vector<std::string> args = {py, script, trace, "--out", dir};
+  std::vector<char *> argv;
+  for (std::string &a : args) {
+    argv.push_back(&a[0]);
+  }
+  argv.push_back(nullptr);
+  pid_t pid;
+  if (posix_spawnp(&pid, py.c_str(), nullptr, nullptr, argv.data(), environ) != 0) {
+    std::fprintf(stderr, "urt_sim: --plot: cannot run %s: %s\n", py.c_str(),
+                 std::strerror(errno));
+    return 1;
+  }
+  int st = 0;
+  while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 1;
+}
+
+int run_replay(const Options &o, const urt_model_t *m, const ReplayRecording &rec) {
+  std::string err;
+  static ReplayResult res;
+  if (replay_run(m, rec, &res, &err) != 0) {
+    std::fprintf(stderr, "urt_sim: %s: %s\n", o.replay.c_str(), err.c_str());
+    return 1;
+  }
+  if (!o.quiet) {
+    replay_print(stdout, m, rec, res);
+  }
+  std::string trace = o.out;
+  if (trace.empty() && !o.plot_dir.empty()) {
+    if (mkdir(o.plot_dir.c_str(), 0777) != 0 && errno != EEXIST) {
+      std::fprintf(stderr, "urt_sim: %s: %s\n", o.plot_dir.c_str(), std::strerror(errno));
+      return 1;
+    }
+    trace = o.plot_dir + "/replay.txt";
+  }
+  if (!trace.empty() && !replay_write_trace(trace, rec, res, &err)) {
+    std::fprintf(stderr, "urt_sim: %s\n", err.c_str());
+    return 1;
+  }
+  if (!o.summary_json.empty() && !replay_write_json(o.summary_json, m, rec, res, &err)) {
+    std::fprintf(stderr, "urt_sim: %s\n", err.c_str());
+    return 1;
+  }
+  if (!o.plot_dir.empty() && run_plot(trace, o.plot_dir) != 0) {
+    std::fprintf(stderr, "urt_sim: --plot: tools/plot_replay.py failed\n");
+    return 1;
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -663,8 +786,13 @@ int main(int argc, char **argv) {
     return rc;
   }
 
-  // load the model; --rate goes last so that it wins over a --set of the same key
-  std::vector<std::string> sets = o.sets;
+  // load the model; --rate goes last so that it wins over a --set of the same key; a replay
+  // runs without sensor noise unless asked (first, so that a --set can still turn it on)
+  std::vector<std::string> sets;
+  if (!o.replay.empty() && !o.noise) {
+    sets.emplace_back("sensors.noise=false");
+  }
+  sets.insert(sets.end(), o.sets.begin(), o.sets.end());
   if (o.rate > 0.0) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "simulation.dt=%.17g", 1.0 / o.rate);
@@ -677,7 +805,13 @@ int main(int argc, char **argv) {
   overrides.push_back(nullptr);
   urt_model_t *m = nullptr;
   char err[1024];
-  rc = urt_model_load(o.config.c_str(), overrides.data(), &m, err, sizeof err);
+  std::vector<const char *> overlays;
+  for (const std::string &s : o.overlays) {
+    overlays.push_back(s.c_str());
+  }
+  overlays.push_back(nullptr);
+  rc = urt_model_load_overlays(o.config.c_str(), overlays.data(), overrides.data(), &m, err,
+                               sizeof err);
   if (rc != 0) {
     std::fprintf(stderr, "%s\n", err);
     return 2;
@@ -686,6 +820,46 @@ int main(int argc, char **argv) {
     urt_model_print(m, stdout, o.json ? 1 : 0);
     urt_model_free(m);
     return std::fflush(stdout) == 0 ? 0 : 1;
+  }
+
+  if (!o.replay.empty()) {
+    // the recording is what the real robot followed: a speed or acceleration above the
+    // model's command limits (proposed values, config/README.md) raises them for this replay,
+    // with a note, rather than stopping it (a later --set still wins)
+    static ReplayRecording rec;
+    std::string rerr;
+    if (replay_csv_read(o.replay, &rec, &rerr) != 0) {
+      std::fprintf(stderr, "%s\n", rerr.c_str());
+      urt_model_free(m);
+      return 2;
+    }
+    std::vector<std::string> raised;
+    replay_limit_overrides(m, rec, &raised);
+    if (!raised.empty()) {
+      urt_model_free(m);
+      m = nullptr;
+      std::vector<std::string> sets2(sets.begin(), sets.begin() + (o.noise ? 0 : 1));
+      for (const std::string &r : raised) {
+        std::fprintf(stderr, "urt_sim: note: the recording exceeds a command limit: --set %s\n",
+                     r.c_str());
+        sets2.push_back(r);
+      }
+      sets2.insert(sets2.end(), sets.begin() + (o.noise ? 0 : 1), sets.end());
+      std::vector<const char *> ov2;
+      for (const std::string &s : sets2) {
+        ov2.push_back(s.c_str());
+      }
+      ov2.push_back(nullptr);
+      rc = urt_model_load_overlays(o.config.c_str(), overlays.data(), ov2.data(), &m, err,
+                                   sizeof err);
+      if (rc != 0) {
+        std::fprintf(stderr, "%s\n", err);
+        return 2;
+      }
+    }
+    rc = run_replay(o, m, rec);
+    urt_model_free(m);
+    return rc;
   }
 
   // the trajectory starts where the model starts, and must pass the model's command limits

@@ -2,7 +2,7 @@
 // tools/urtwin.cpp — the emulator: loads a robot parameter file, starts the hard real-time loop
 // (core/loop.c) and the UR network interfaces (net/), and runs until SIGINT/SIGTERM.
 //
-//   urtwin [--config FILE] [--set KEY=VALUE]... [--bind ADDR] [--port-offset N]
+//   urtwin [--config FILE] [--overlay FILE]... [--set KEY=VALUE]... [--bind ADDR] [--port-offset N]
 //          [--controller-version 5.19|3.15|…] [--rate 20000|10000] [--pacing tick|step|free|lockstep]
 //          [--seed N] [--q0 q1,…,q6] [--boot ready|power-off] [--lcm] [--lcm-url URL] …
 //          [--dds] [--dds-domain N] [--dds-config FILE] [--dds-prefix NS] …
@@ -36,6 +36,7 @@ void on_signal(int) { g_stop = 1; }
 struct Options {
   std::string config = "config/ur5.yaml";
   std::vector<std::string> sets;
+  std::vector<std::string> overlays;  // --overlay FILE, applied in order before --set
   std::string bind = "127.0.0.1";
   int port_offset = 0;
   std::string version = "5.19";
@@ -149,6 +150,8 @@ int main(int argc, char** argv) {
   Options o;
   CLI::App app{"urtwin: a real-time emulator of a Universal Robots UR5 (physics + UR network ports)"};
   app.add_option("-c,--config", o.config, "robot parameter file")->capture_default_str();
+  app.add_option("--overlay", o.overlays,
+                 "apply an overlay file after the config, before --set (repeatable, in order)");
   app.add_option("-s,--set", o.sets, "override a config value, KEY=VALUE (repeatable)");
   app.add_option("--bind", o.bind, "IPv4 address every server binds")->capture_default_str();
   app.add_option("--port-offset", o.port_offset, "added to every port (several emulators per host)")
@@ -276,7 +279,13 @@ int main(int argc, char** argv) {
 
   urt_model_t* m = nullptr;
   char err[512];
-  if (urt_model_load(o.config.c_str(), overrides.data(), &m, err, sizeof err) != 0) {
+  std::vector<const char*> overlays;
+  for (const std::string& s : o.overlays) {
+    overlays.push_back(s.c_str());
+  }
+  overlays.push_back(nullptr);
+  if (urt_model_load_overlays(o.config.c_str(), overlays.data(), overrides.data(), &m, err,
+                              sizeof err) != 0) {
     std::fprintf(stderr, "urtwin: %s\n", err);
     return 2;
   }

@@ -113,3 +113,9 @@ def test_bench_py__merges_everything_into_one_json(tmp_path):
             assert pin["native"]["max_rel_diff_vs_aba"] < 1e-9
     assert res["ratios"] and all(r["value"] > 0 for r in res["ratios"])
     assert "urt_step" in proc.stdout
+    # the replay speed: reported (8 s recording in --quick), never judged against its target
+    rp = res["replay"]
+    assert rp["status"] == "ok", rp
+    assert rp["runs"] == 1 and rp["duration_s"] == 8.0
+    assert math.isfinite(rp["speed_median"]) and rp["speed_median"] > 0
+    assert "urt_sim --replay" in proc.stdout

@@ -42,6 +42,12 @@ def load_library(path=LIBURTWIN):
                                    ctypes.POINTER(p),
                                    ctypes.c_char_p, ctypes.c_size_t]
     lib.urt_model_load.restype = ctypes.c_int
+    lib.urt_model_load_overlays.argtypes = [ctypes.c_char_p, ctypes.POINTER(ctypes.c_char_p),
+                                            ctypes.POINTER(ctypes.c_char_p), ctypes.POINTER(p),
+                                            ctypes.c_char_p, ctypes.c_size_t]
+    lib.urt_model_load_overlays.restype = ctypes.c_int
+    lib.urt_config_key_unit.argtypes = [ctypes.c_char_p]
+    lib.urt_config_key_unit.restype = ctypes.c_char_p
     lib.urt_model_free.argtypes = [p]
     lib.urt_model_free.restype = None
     for name, nargs in (("urt_arm_tcp_pose", 2), ("urt_arm_jacobian", 2),
@@ -58,18 +64,22 @@ def load_library(path=LIBURTWIN):
 
 
 class Model:
-    """A model loaded through urt_model_load(); use as a context manager or call close()."""
+    """A model loaded through urt_model_load_overlays() (overlay files, then "key=value"
+    overrides); use as a context manager or call close()."""
 
-    def __init__(self, lib, path=UR5_YAML, overrides=()):
+    def __init__(self, lib, path=UR5_YAML, overrides=(), overlays=()):
         self.lib = lib
         self.ptr = ctypes.c_void_p()
         err = ctypes.create_string_buffer(512)
-        ov = None
-        if overrides:
-            # NULL-terminated "key.path=value" list, as urt_model_load() takes it
-            ov = (ctypes.c_char_p * (len(overrides) + 1))(*[o.encode() for o in overrides], None)
-        rc = lib.urt_model_load(str(path).encode(), ov, ctypes.byref(self.ptr), err,
-                                ctypes.sizeof(err))
+
+        def c_list(items):
+            # NULL-terminated, as the loader takes them
+            if not items:
+                return None
+            return (ctypes.c_char_p * (len(items) + 1))(*[str(o).encode() for o in items], None)
+
+        rc = lib.urt_model_load_overlays(str(path).encode(), c_list(overlays), c_list(overrides),
+                                         ctypes.byref(self.ptr), err, ctypes.sizeof(err))
         if rc != 0 or not self.ptr:
             raise RuntimeError(f"urt_model_load({path}) = {rc}: {err.value.decode()}")
 

@@ -132,9 +132,13 @@ typedef enum urt_ctrl_cmd_kind {
   URT_CTRL_PROTECTIVE_STOP,   /* URScript protective_stop(): a protective stop now (RUNNING
                                  only), fault URT_CTRL_FAULT_SCRIPT_PSTOP (C209A0 on 30001)   */
   /* added by the motions issue (core/motion_*.cpp) */
-  URT_CTRL_OPTIMOVEJ          /* q[6], a, v: fractions in (0, 1] of every joint's maximum
+  URT_CTRL_OPTIMOVEJ,         /* q[6], a, v: fractions in (0, 1] of every joint's maximum
                                  acceleration and speed (qdd_max, qd_max; the planner keeps
                                  its margins 0.9, 0.98); r as movej. A motion: done on arrival */
+  /* added by the replay (urt_sim --replay) */
+  URT_CTRL_SETPOINT           /* q[6], qd[6], pose[0..5] = q̈[6], tau[6]: a complete joint
+                                 set-point at the end of the period, as a recorded controller's
+                                 target_q/qd/qdd; otherwise as DIRECT (done in its period) */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {

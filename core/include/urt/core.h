@@ -31,6 +31,19 @@ extern "C" {
 int urt_model_load(const char *path, const char *const *overrides, urt_model_t **out, char *err,
                    size_t err_sz);
 
+/* As urt_model_load, with overlay files applied in order after the config (and its
+ * `include:`s) and before the overrides. An overlay is YAML: `overlay:` (free-form
+ * provenance), `include:` (overlays, relative to it) and `set:` with --set keys, each a bare
+ * value or {value, unit, from, residual}; config/README.md has the rules. An overlay's error
+ * reads "overlayfile:line: key: reason". Nullable: overlays, overrides, err. Context: non-RT. */
+int urt_model_load_overlays(const char *path, const char *const *overlays,
+                            const char *const *overrides, urt_model_t **out, char *err,
+                            size_t err_sz);
+
+/* The unit of a config key ("joints.1.friction.f_c" → "N m"), as urt_model_print writes it,
+ * or NULL when the key is not one of the file's. Context: any. */
+const char *urt_config_key_unit(const char *key);
+
 /* Compute derived parameters and integrator tables of a filled-in model (the loader calls this).
  * Context: non-RT (allocates m->tables). Returns 0 or URT_ENOMEM / URT_ESOLVER. */
 int urt_model_prepare(urt_model_t *m);
