@@ -72,41 +72,20 @@ def tool(name):
 
 
 def resolved(config, sets=()):
-    """The model urtwin resolves (urt_config --json) and the units it prints per key."""
-    args = [tool("urt_config")] + [a for s in sets for a in ("--set", s)] + [str(config)]
-    js = subprocess.run(args[:1] + ["--json"] + args[1:], capture_output=True, text=True)
+    """The model urtwin resolves (urt_config --json) and its printed units, keyed by generic
+    path ("joints[].friction.f_c"): the units an overlay entry must state."""
+    args = [tool("urt_config"), "--json"] + [a for s in sets for a in ("--set", s)] + [str(config)]
+    js = subprocess.run(args, capture_output=True, text=True)
     if js.returncode != 0:
         raise UsageError(js.stderr.strip() or f"urt_config failed on {config}")
-    txt = subprocess.run(args, capture_output=True, text=True, check=True).stdout
-    return json.loads(js.stdout), print_units(txt)
+    params = json.loads(js.stdout)
+    return params, params.get("units", {})
 
 
-def print_units(text):
-    """{dotted key with 0-based indices: unit} from urt_config's YAML print (# [unit])."""
-    units, stack, counters = {}, [], {}
-    for line in text.splitlines():
-        m = re.match(r"^( *)(- )?([A-Za-z_0-9]+):(.*)$", line)
-        if not m:
-            continue
-        indent, dash, key, rest = len(m.group(1)), m.group(2), m.group(3), m.group(4)
-        if dash:
-            while stack and stack[-1][0] >= indent:
-                stack.pop()
-            parent = ".".join(n for _, n in stack)
-            idx = counters.get(parent, 0)
-            counters[parent] = idx + 1
-            stack.append((indent, str(idx)))
-            indent += 2
-        while stack and stack[-1][0] >= indent:
-            stack.pop()
-        path = ".".join([n for _, n in stack] + [key])
-        u = re.search(r"#\s*\[([^\]]*)\]", rest)
-        if u:
-            units[path] = u.group(1)
-        value = rest.split("#", 1)[0].strip()
-        if not value:
-            stack.append((indent, key))
-    return units
+def unit_of(units, key):
+    """The printed unit of a --set key such as joints.1.friction.f_c or arm.links.2.com."""
+    generic = re.sub(r"\.(\d+)(?=\.|$)", "[]", key)
+    return units.get(generic)
 
 
 #---- the parameter vector ----
@@ -286,7 +265,7 @@ def write_overlay(path, name, base, argv, spec, res, per_joint, units, files, pa
         "set:",
     ]
     for key, val in keys.items():
-        unit = units.get(key)
+        unit = unit_of(units, key)
         if unit is None:
             raise UsageError(f"urt_config prints no unit for {key}")
         resid = float(np.sqrt(np.mean(per_joint[list(joints_of[key])] ** 2)))
