@@ -305,20 +305,24 @@ def replay(path, overlay=None, config=None):
 
 
 def replay_table(path, summary, moving, label):
+    """The replay table as markdown, and whether the twin's error is at most UR's on every
+    moving joint (True when the recording has no target_current to compare with)."""
     names = ("base", "shoulder", "elbow", "wrist1", "wrist2", "wrist3")
+    f = lambda v, d=3: "-" if v is None else f"{v:.{d}f}"
     rows = [f"{Path(path).name} ({label}): RMS current [A]",
-            f"| joint | moves | RMS meas | RMS(twin-meas) | RMS(UR-meas) | ratio twin | ratio UR |"
-            f" corr twin | twin <= UR |",
+            "| joint | moves | RMS meas | RMS(twin-meas) | RMS(UR-meas) | ratio twin | ratio UR |"
+            " corr twin | twin <= UR |",
             "|---|---|---|---|---|---|---|---|---|"]
     ok = True
     for j, js in enumerate(summary["joints"]):
-        good = js["rms_err_twin"] <= js["rms_err_ur"]
+        ur = js["rms_err_ur"]
+        good = ur is None or js["rms_err_twin"] <= ur
         if moving[j]:
             ok &= good
-        rows.append(f"| {names[j]} | {'yes' if moving[j] else 'no'} | {js['rms_meas']:.3f} | "
-                    f"{js['rms_err_twin']:.3f} | {js['rms_err_ur']:.3f} | {js['ratio_twin']:.2f} |"
-                    f" {js['ratio_ur']:.2f} | {js['corr_twin']:.2f} | "
-                    f"{('yes' if good else 'NO') if moving[j] else '-'} |")
+        verdict = ("yes" if good else "NO") if moving[j] and ur is not None else "-"
+        rows.append(f"| {names[j]} | {'yes' if moving[j] else 'no'} | {f(js['rms_meas'])} | "
+                    f"{f(js['rms_err_twin'])} | {f(ur)} | {f(js['ratio_twin'], 2)} | "
+                    f"{f(js['ratio_ur'], 2)} | {f(js['corr_twin'], 2)} | {verdict} |")
     return "\n".join(rows), ok
 
 
@@ -349,10 +353,9 @@ def judge(h, overlay, config):
     moving = (h["target_q"].max(axis=0) - h["target_q"].min(axis=0)) > MOVE_RANGE
     base = replay(h.path, config=config)
     fitted = replay(h.path, overlay=overlay, config=config)
-    ok = True
-    for label, s in (("paper parameters", base), (f"overlay {Path(overlay).name}", fitted)):
-        table, ok = replay_table(h.path, s, moving, label)
-        print(table, flush=True)
+    print(replay_table(h.path, base, moving, "paper parameters")[0], flush=True)
+    table, ok = replay_table(h.path, fitted, moving, f"overlay {Path(overlay).name}")
+    print(table, flush=True)
     print(f"{h.path.name}: twin <= UR on every moving joint with the overlay: "
           f"{'yes' if ok else 'NO'}", flush=True)
     return ok

@@ -175,3 +175,30 @@ def test_identify__missing_out_is_a_usage_error(tmp_path):
     r = identify(tmp_path / "x.csv")
     assert r.returncode == 2
     assert "--out" in r.stderr
+
+
+def test_identify__holdout_replays_through_the_twin_and_the_overlay_helps(fitted, synthetic,
+                                                                          tmp_path):
+    # the synthetic robot's shoulder has f_c 6 and a 0.25 A offset: the paper's twin misses
+    # them, the fitted overlay must replay that recording closer (the twin's own numbers)
+    ov = synthetic.parent / "overlay.yaml"
+    summaries = {}
+    for label, extra in (("paper", []), ("overlay", ["--overlay", str(ov)])):
+        out = tmp_path / f"{label}.json"
+        r = subprocess.run([str(URT_SIM), "--quiet", "--replay", str(synthetic), "--summary-json",
+                            str(out), *extra], capture_output=True, text=True, cwd=ROOT)
+        assert r.returncode == 0, r.stderr
+        summaries[label] = yaml.safe_load(out.read_text())
+    paper = summaries["paper"]["joints"][1]["rms_err_twin"]
+    fit = summaries["overlay"]["joints"][1]["rms_err_twin"]
+    print(f"shoulder RMS(twin - synthetic) [A]: paper {paper:.3f}, overlay {fit:.3f}")
+    assert fit < 0.6 * paper  # measured: 0.348 → 0.162 A
+    # and urt_identify --holdout prints that table
+    other = tmp_path / "other.csv"
+    other.write_text(synthetic.read_text())
+    r = identify(other, "--out", tmp_path / "o2.yaml", "--no-arm", "--quiet", "--max-iter", "3",
+                 "--holdout", synthetic)
+    assert r.returncode == 0, r.stderr
+    assert f"{synthetic.name} (paper parameters): RMS current [A]" in r.stdout
+    assert f"{synthetic.name} (overlay o2.yaml): RMS current [A]" in r.stdout
+    assert "| shoulder | yes |" in r.stdout
