@@ -14,7 +14,8 @@ level f_v, the Stribeck level k_static and speed qd_s, the direction asymmetry a
 joint the current-measurement offset; and the CoMs of links 2–6 (the first moments that set
 the gravity torques of shoulder, elbow and wrists; masses are kept, a CoM is a mass-weighted
 position), each within physical bounds and pulled weakly towards the paper's value so that
-what the recordings cannot see stays the paper's. A payload (payload.mass, payload.cog) is
+what the recordings cannot see stays the paper's. A Stribeck dip steeper than the gear's output
+damping (the paper's own dip where that is steeper) is penalised: it would self-excite. A payload (payload.mass, payload.cog) is
 fitted when the model has those keys (urt_config prints a `payload` block).
 
 It prints one progress line per iteration, then writes the overlay: only the keys it changed,
@@ -185,6 +186,30 @@ def predict(spec, x, params, arm, drives, fd):
 
 #---- the fit ----
 
+SLOPE_WEIGHT = 10.0
+_V = 1e-6 * 10.0 ** (7.0 * np.arange(401) / 400.0)  # 1e-6 … 10 rad/s, as model_prepare.cpp
+
+
+def stribeck_slope_min(fr, k_q):
+    """Most negative dg/dq̇ per joint over both directions (core/model_prepare.cpp's search)."""
+    worst = np.zeros(NJ)
+    for side in (1.0, -1.0):
+        fc = fr["f_c"] * (1.0 + side * fr["asym"])
+        e = np.exp(-np.outer(_V, k_q / fr["qd_s"]))
+        dg = -fc * fr["k_static"] * (k_q / fr["qd_s"]) * e + \
+            (2.0 / 3.0) * fr["f_v"] * np.cbrt(1.0 / _V)[:, None]
+        worst = np.minimum(worst, dg.min(axis=0))
+    return worst
+
+
+def stribeck_slope_bound(params):
+    """Per joint: the steepest Stribeck slope allowed [N m s/rad], the gear output damping
+    c_CS (a steeper dip negatively damps the load mode: config/README.md, "Why k_q = 5"), or
+    the paper's own slope where that is already steeper (size A: −14.6 against 13.9)."""
+    return np.array([max(j["gear"]["c_cs"], -s) for j, s in
+                     zip(params["joints"], params["integrator"]["friction_slope_min"])])
+
+
 def fit(files, params, arm, drives, payload_keys, max_iter, quiet=False):
     moving = np.zeros(NJ, dtype=bool)
     for fd in files:
@@ -196,9 +221,15 @@ def fit(files, params, arm, drives, payload_keys, max_iter, quiet=False):
     x_paper = spec.x0.copy()
     prior_w = PRIOR_WEIGHT * np.sqrt(n_res / NJ)
 
+    slope_bound = stribeck_slope_bound(params)
+
     def residuals(x):
         parts = [(fd.weight * (predict(spec, x, params, arm, drives, fd) - fd.i_meas) /
                   scale).ravel() for fd in files]
+        # a Stribeck dip steeper than the bound is a self-excited stick-slip, not a fit
+        fr = spec.unpack(x, params)[0]
+        excess = np.maximum(0.0, -stribeck_slope_min(fr, drives.k_q) - slope_bound)
+        parts.append(SLOPE_WEIGHT * np.sqrt(n_res) * excess / slope_bound)
         parts.append(prior_w * (x[spec.prior] - x_paper[spec.prior]) / spec.prior_scale)
         return np.concatenate(parts)
 
