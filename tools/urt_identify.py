@@ -302,6 +302,8 @@ def write_overlay(path, name, base, argv, spec, res, per_joint, units, files, pa
         resid = float(np.sqrt(np.mean(per_joint[list(joints_of[key])] ** 2)))
         lines.append(f"  {key}: {{value: {fmt(val)}, unit: \"{unit}\", from: [{from_list}], "
                      f"residual: {resid:.4g}}}")
+    if not keys:
+        lines[-1] = "set: {}"
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     Path(path).write_text("\n".join(lines) + "\n")
     return keys
