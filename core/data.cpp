@@ -35,12 +35,17 @@ extern "C" int urt_data_init(const urt_model_t* m, urt_data_t* d, const double* 
     x[URT_X_QCS] = u[4];
 
     // the current that holds it, and the integrators that produce that current with zero
-    // error: V = R i0 needs ξ_c = R i0 / I_cur, i_ref = i0 needs ξ_v = i0 / I_vel
+    // error: V = R i0 needs ξ_c = R i0 / I_cur, i_ref = i0 needs ξ_v = i0 / I_vel. With a
+    // measurement offset the loop sees i0 + i_offset, so i_ref must be that.
     double i0 = t_in / m->motor[j].kt;
+    double i_ref0 = i0;
+    if (m->joint[j].i_offset != 0.0) {
+      i_ref0 += m->joint[j].i_offset;
+    }
     x[URT_X_I] = i0;
     x[URT_X_I_F] = i0;
     x[URT_X_XI_C] = m->motor[j].r * i0 / m->control[j].i_cur;
-    x[URT_X_XI_V] = i0 / m->control[j].i_vel;
+    x[URT_X_XI_V] = i_ref0 / m->control[j].i_vel;
   }
 
   urt_rng_seed(&d->rng, m->seed);

@@ -25,7 +25,12 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
   urt_sensors_state_t ss = {x[URT_X_I_F], x[URT_X_W], x[URT_X_WD], x[URT_X_P], x[URT_X_PD]};
 
   // measurements: continuous filter outputs plus the held error of this sample
+  // the measurement's zero offset is added only when there is one: x + 0.0 turns a −0.0 into
+  // +0.0, and the paper's robot must keep its bits
   double i_fb = ss.i_f + in.eps_i;
+  if (in.i_offset != 0.0) {
+    i_fb += in.i_offset;
+  }
   double qdm_fb = ss.w + in.eps_w;
   double q_fb = ss.p + in.eps_q;
 
@@ -101,6 +106,7 @@ JointInput joint_input(const urt_model_t* m, const urt_data_t* d, int j, double 
   in.qd_set = c.qd[j] + c.qdd[j] * s;
   in.i_ff = c.tau_ff[j] / (m->motor[j].kt * m->gear[j].ratio);
   in.eps_i = d->eps_i[j];
+  in.i_offset = m->joint[j].i_offset;
   in.eps_w = d->eps_w[j];
   in.eps_q = d->eps_q[j];
   in.drives_engaged = m->drives_engaged;

@@ -27,6 +27,7 @@ struct JointInput {
   double q_set, qd_set;    // set-point at the evaluation time [rad, rad/s]
   double i_ff;             // current feed-forward [A]
   double eps_i, eps_w, eps_q;  // held measurement errors (sensors.h)
+  double i_offset;         // zero offset of the current measurement [A]
   int drives_engaged;
   int torque;              // 1: torque mode (urt_command_t.torque_mask)
 };

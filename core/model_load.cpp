@@ -648,13 +648,12 @@ void load_gear(const Field &f, urt_harmonic_drive_params_t *g) {
   g->zeta = s["zeta"].number(in(0.0, 10.0));
 }
 
+// The bristle part is common to all joints; the levels and the Stribeck dip are per joint.
 void load_friction_common(const Field &f, urt_friction_params_t *fr) {
-  Map s = f.map({"enabled", "sigma0", "sigma1", "qd_s", "k_static"});
+  Map s = f.map({"enabled", "sigma0", "sigma1"});
   fr->enabled = s["enabled"].boolean() ? 1 : 0;
   fr->sigma0 = s["sigma0"].number(gt(0.0));
   fr->sigma1 = s["sigma1"].number(ge(0.0));
-  fr->qd_s = s["qd_s"].number(gt(0.0));
-  fr->k_static = s["k_static"].number(ge(0.0));
 }
 
 // The sensor section as written; per-joint quanta follow from i_max and dt.
@@ -696,7 +695,7 @@ void load_joints(const Field &f, const urt_harmonic_drive_params_t gear[2],
   std::vector<Field> joints = f.list(URT_NJ);
   for (size_t j = 0; j < URT_NJ; j++) {
     Map s = joints[j].map({"name", "size", "q_min", "q_max", "qd_max", "qdd_max", "torque_max",
-                           "q0", "control", "motor", "friction"});
+                           "q0", "current_offset", "control", "motor", "friction"});
     urt_joint_params_t *jp = &m->joint[j];
 
     // identity and drive size
@@ -744,13 +743,26 @@ void load_joints(const Field &f, const urt_harmonic_drive_params_t gear[2],
     cp->v_net = v_net;
     cp->i_max = jp->torque_max / (mp->kt * ratio);
 
-    // friction: the common LuGre part plus this joint's levels; g(0) = f_c (1 + K_s) > 0
-    Map fr = s["friction"].map({"f_c", "f_v", "k_q"});
+    // a current-measurement zero offset beyond a fifth of full current is a broken sensor,
+    // not a calibration
+    jp->i_offset = s["current_offset"].number(any_finite());
+    if (std::fabs(jp->i_offset) > 0.2 * cp->i_max) {
+      s["current_offset"].fail("must be in [-0.2 i_max, 0.2 i_max] = [" +
+                               fmt_g(-0.2 * cp->i_max) + ", " + fmt_g(0.2 * cp->i_max) +
+                               "] A (got " + fmt_g(jp->i_offset) + ")");
+    }
+
+    // friction: the common LuGre part plus this joint's levels and Stribeck dip;
+    // g(0) = f_c (1 ± a)(1 + K_s) > 0 needs f_c > 0 and |a| < 1
+    Map fr = s["friction"].map({"f_c", "f_v", "k_q", "k_static", "qd_s", "asym"});
     urt_friction_params_t *fp = &m->friction[j];
     *fp = fric;
     fp->f_c = fr["f_c"].number(gt(0.0));
     fp->f_v = fr["f_v"].number(ge(0.0));
     fp->k_q = fr["k_q"].number(ge(0.0));
+    fp->k_static = fr["k_static"].number(in(0.0, 10.0));
+    fp->qd_s = fr["qd_s"].number(in_lo_open(0.0, 100.0));
+    fp->asym = fr["asym"].number(in_open(-1.0, 1.0, "in (-1, 1)"));
 
     // sensors: common settings, ADC quantum from this joint's i_max
     m->sensors[j] = sc.common;

@@ -18,12 +18,17 @@ using MatD = Eigen::Matrix<double, URT_NXD, URT_NXD>;
 using VecD = Eigen::Matrix<double, URT_NXD, 1>;
 
 // Most negative slope of the friction law g(q̇): the Stribeck dip is a genuine instability of
-// growth rate |g'|/J_out that the step size must respect (model.md §5.3d–e).
+// growth rate |g'|/J_out that the step size must respect (model.md §5.3d–e). The slope of g
+// on the negative side is −dg/dq̇ there; with an asymmetric Coulomb level (a ≠ 0) the side
+// with the larger level has the steeper dip, so both sides are searched.
 double friction_slope_min(const urt_friction_params_t* fp) {
   double worst = 0.0;
   for (int k = 0; k <= 400; k++) {
     double v = 1e-6 * std::pow(10.0, 7.0 * k / 400.0);  // 1e-6 … 10 rad/s
     worst = std::fmin(worst, urt_friction_dg(fp, v));
+    if (fp->asym != 0.0) {
+      worst = std::fmin(worst, -urt_friction_dg(fp, -v));
+    }
   }
   return worst;
 }
@@ -51,7 +56,8 @@ double output_inertia_min(const urt_model_t* m, int j) {
 void drive_columns(const urt_model_t* m, int j, int set, MatD& a, VecD& b_q, VecD& b_qd,
                    VecD& f_qset, VecD& f_qdset) {
   double x[URT_NXJ] = {0}, f0[URT_NXJ], f1[URT_NXJ];
-  JointInput in = {0, 0, 0, 0, 0, 0, 1, 0};
+  // the affine columns are differences, so the current offset (a constant input) is left 0
+  JointInput in = {0, 0, 0, 0, 0, 0, 0.0, 1, 0};
   JointAux aux;
   drive_rhs(m, j, x, in, set, f0, &aux);
   auto column = [&](VecD& col) {
@@ -96,7 +102,9 @@ int integrator_prepare(const urt_model_t* m, urt_integrator_tables* tab) noexcep
     double ratio = m->dt * std::fabs(tab->g_slope_min[j]) / tab->j_out[j];
     tab->substepped[j] = m->friction[j].enabled && tab->n_sub > 1 && ratio > m->substep_ratio;
     const urt_friction_params_t& fp = m->friction[j];
-    tab->z_max[j] = fp.enabled ? urt_friction_g(&fp, m->joint[j].qd_max) / fp.sigma0 : 0.0;
+    double g_max = std::fmax(urt_friction_g(&fp, m->joint[j].qd_max),
+                             urt_friction_g(&fp, -m->joint[j].qd_max));
+    tab->z_max[j] = fp.enabled ? g_max / fp.sigma0 : 0.0;
   }
 
   // W_d⁻¹ and couplings for every joint, step kind and active set

@@ -362,6 +362,7 @@ void print_joint(Emitter &e, const urt_model_t *m, int j) {
   e.num("qdd_max", jp->qdd_max, "rad/s^2");
   e.num("torque_max", jp->torque_max, "N m");
   e.num("q0", m->q0[j], "rad");
+  e.num("current_offset", jp->i_offset, "A");
 
   const urt_motor_params_t *mo = &m->motor[j];
   e.begin_map("motor");
@@ -418,6 +419,7 @@ void print_joint(Emitter &e, const urt_model_t *m, int j) {
   e.num("f_c", f->f_c, "N m");
   e.num("f_v", f->f_v, "N m (s/rad)^(2/3)");
   e.num("k_q", f->k_q, "-");
+  e.num("asym", f->asym, "-");
   e.end_map();
 
   const urt_sensors_params_t *s = &m->sensors[j];

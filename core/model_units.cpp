@@ -52,8 +52,6 @@ const KeyUnit kUnits[] = {
     {"friction_common.enabled", "-"},
     {"friction_common.sigma0", "N m/rad"},
     {"friction_common.sigma1", "N m s/rad"},
-    {"friction_common.qd_s", "rad/s"},
-    {"friction_common.k_static", "-"},
     {"sensors.noise", "-"},
     {"sensors.quantise", "-"},
     {"sensors.current.f", "Hz"},
@@ -79,6 +77,7 @@ const KeyUnit kUnits[] = {
     {"joints[].qdd_max", "rad/s^2"},
     {"joints[].torque_max", "N m"},
     {"joints[].q0", "rad"},
+    {"joints[].current_offset", "A"},
     {"joints[].control.p_pos", "rad_motor/s per rad_joint"},
     {"joints[].control.p_vel", "A s/rad"},
     {"joints[].control.i_vel", "A/rad"},
@@ -91,10 +90,14 @@ const KeyUnit kUnits[] = {
     {"joints[].friction.f_c", "N m"},
     {"joints[].friction.f_v", "N m (s/rad)^(2/3)"},
     {"joints[].friction.k_q", "-"},
+    {"joints[].friction.k_static", "-"},
+    {"joints[].friction.qd_s", "rad/s"},
+    {"joints[].friction.asym", "-"},
     // the payload (issue 10 item 1); harmless while the file has no payload section
     {"payload.mass", "kg"},
-    {"payload.cog", "m"},
-    {"payload.inertia", "kg m^2; Ixx Iyy Izz Ixy Ixz Iyz"},
+    // as urt_model_print writes them (the payload's own frame and reference point)
+    {"payload.cog", "m, flange frame"},
+    {"payload.inertia", "kg m^2 about the CoG; Ixx Iyy Izz Ixy Ixz Iyz"},
 };
 
 // "gear_sizes.A.k_wg" matches "gear_sizes.*.k_wg" (* is one component: A or B)

@@ -7,7 +7,7 @@
 
 double urt_friction_g(const urt_friction_params_t *p, double qd) {
   double g, v_dg;
-  urt__friction_g_and_vdg(p, fabs(qd), &g, &v_dg);
+  urt__friction_g_and_vdg(p, urt__friction_fc(p, qd), fabs(qd), &g, &v_dg);
   return g;
 }
 
@@ -17,7 +17,7 @@ double urt_friction_dg(const urt_friction_params_t *p, double qd) {
     return 0.0;
   }
   double g, v_dg;
-  urt__friction_g_and_vdg(p, v, &g, &v_dg);
+  urt__friction_g_and_vdg(p, urt__friction_fc(p, qd), v, &g, &v_dg);
   return (qd > 0.0 ? 1.0 : -1.0) * v_dg / v;
 }
 

@@ -44,10 +44,36 @@ static void test_data_init__shoulder_holds_with_3_913_A_at_q0(void **state) {
   urt_model_free(m);
 }
 
+// A current-measurement offset shows in the measured current, not in the motor's: the start
+// stays at rest, the motor carries the gravity current and the measurement reads 0.3 A more.
+static void test_data_init__current_offset_shows_in_the_measurement_only(void **state) {
+  (void)state;
+  const char *const set[] = {"sensors.noise=false", "sensors.quantise=false",
+                             "joints.1.current_offset=0.3", NULL};
+  urt_model_t *m = urt_test_model(set), *m0 = urt_test_model(urt_test_quiet);
+  urt_data_t *d = calloc(1, sizeof *d), *d0 = calloc(1, sizeof *d0);
+  assert_int_equal(urt_data_init(m, d, NULL), 0);
+  assert_int_equal(urt_data_init(m0, d0, NULL), 0);
+  int n = (int)lround(0.2 / m->dt);
+  for (int k = 0; k < n; k++) {
+    assert_int_equal(urt_step(m, d), 0);
+    assert_int_equal(urt_step(m0, d0), 0);
+  }
+  assert_true(fabs(d->x[1][URT_X_QD]) < 1e-6);
+  assert_near(d->x[1][URT_X_I], d0->x[1][URT_X_I], 1e-6);
+  assert_near(d->i_fb[1] - d0->i_fb[1], 0.3, 1e-6);
+  assert_near(d->i_fb[2], d0->i_fb[2], 0.0);  // other joints untouched, bit for bit
+  free(d);
+  free(d0);
+  urt_model_free(m);
+  urt_model_free(m0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_data_init__start_at_rest_under_gravity_does_not_move),
       cmocka_unit_test(test_data_init__shoulder_holds_with_3_913_A_at_q0),
+      cmocka_unit_test(test_data_init__current_offset_shows_in_the_measurement_only),
   };
   return cmocka_run_group_tests_name("core/data", tests, NULL, NULL);
 }

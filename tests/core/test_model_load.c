@@ -447,7 +447,44 @@ static void test_model_load__truncates_long_message_to_err_sz(void **state) {
   assert_int_equal(strlen(err), sizeof err - 1);
 }
 
+// the calibration keys: per-joint Stribeck level and speed, asymmetry, current offset
+static void test_model_load__loads_per_joint_friction_and_current_offset(void **state) {
+  (void)state;
+  const char *const set[] = {"joints.4.friction.k_static=0.7", "joints.4.friction.qd_s=0.2",
+                             "joints.4.friction.asym=-0.25", "joints.2.current_offset=0.4",
+                             NULL};
+  urt_model_t *m = NULL;
+  char err[512] = "";
+  int rc = urt_model_load(urt_test_path("config/ur5.yaml"), set, &m, err, sizeof err);
+  assert_int_equal(rc, URT_OK);
+  assert_near(m->friction[4].k_static, 0.7, 0.0);
+  assert_near(m->friction[4].qd_s, 0.2, 0.0);
+  assert_near(m->friction[4].asym, -0.25, 0.0);
+  assert_near(m->joint[2].i_offset, 0.4, 0.0);
+  // the others keep the paper's shared values
+  assert_near(m->friction[3].k_static, 0.3, 0.0);
+  assert_near(m->friction[3].qd_s, 0.5, 0.0);
+  assert_near(m->friction[3].asym, 0.0, 0.0);
+  assert_near(m->joint[1].i_offset, 0.0, 0.0);
+  urt_model_free(m);
+}
+
 //---- override errors ----
+
+static void test_model_load__rejects_asymmetry_of_one(void **state) {
+  (void)state;
+  const char *const set[] = {"joints.1.friction.asym=1", NULL};
+  expect_error(ur5_text, set, URT_ECONFIG,
+               ":override: joints[1].friction.asym: must be in (-1, 1) (got 1)");
+}
+
+static void test_model_load__rejects_current_offset_beyond_a_fifth_of_i_max(void **state) {
+  (void)state;
+  const char *const set[] = {"joints.1.current_offset=3", NULL};
+  expect_error(ur5_text, set, URT_ECONFIG,
+               ":override: joints[1].current_offset: must be in [-0.2 i_max, 0.2 i_max] = "
+               "[-2.18244, 2.18244] A (got 3)");
+}
 
 static void test_model_load__rejects_bad_override_value(void **state) {
   (void)state;
@@ -542,6 +579,9 @@ int main(void) {
       cmocka_unit_test(test_model_load__reports_missing_file_as_eio),
       cmocka_unit_test(test_model_load__accepts_null_err_buffer),
       cmocka_unit_test(test_model_load__truncates_long_message_to_err_sz),
+      cmocka_unit_test(test_model_load__loads_per_joint_friction_and_current_offset),
+      cmocka_unit_test(test_model_load__rejects_asymmetry_of_one),
+      cmocka_unit_test(test_model_load__rejects_current_offset_beyond_a_fifth_of_i_max),
       cmocka_unit_test(test_model_load__rejects_bad_override_value),
       cmocka_unit_test(test_model_load__thermal_by_drive_size),
       cmocka_unit_test(test_model_load__rejects_override_without_value),

@@ -6,7 +6,7 @@
 #include "urt/drivers/friction.h"
 #include "urt/drivers/friction_inline.h"
 
-static const urt_friction_params_t kWrist = {1, 5e6, 100, 0.5, 0.3, 2.0, 2.0, 10.0};
+static const urt_friction_params_t kWrist = {1, 5e6, 100, 0.5, 0.3, 2.0, 2.0, 10.0, 0.0};
 
 static void test_friction_g__is_even_and_finite_for_negative_speed(void **state) {
   (void)state;
@@ -45,6 +45,26 @@ static void test_friction_dg__stribeck_dip_is_about_minus_3_7(void **state) {
     worst = fmin(worst, urt_friction_dg(&kWrist, v));
   }
   assert_near(worst, -3.7, 0.2);  // model.md §2.2
+}
+
+// asym scales the Coulomb and Stribeck level by 1 ± a per direction; the viscous part stays
+static void test_friction__asymmetry_scales_the_coulomb_level_per_direction(void **state) {
+  (void)state;
+  urt_friction_params_t p = kWrist;
+  p.asym = 0.2;
+  double v = 0.4, sym = urt_friction_g(&kWrist, v), visc = kWrist.f_v * cbrt(v * v);
+  assert_near(urt_friction_g(&p, v) - visc, 1.2 * (sym - visc), 1e-12);
+  assert_near(urt_friction_g(&p, -v) - visc, 0.8 * (sym - visc), 1e-12);
+  // steady sliding backwards gives −g(q̇ < 0)
+  double z = -urt_friction_g(&p, -v) / p.sigma0;
+  urt_friction_out_t o = urt_friction_eval(&p, &(urt_friction_state_t){z}, -v);
+  assert_near(o.dz, 0.0, 1e-12);
+  assert_near(o.t_f, -urt_friction_g(&p, -v), 1e-9);
+  // ż is continuous through rest from both sides
+  double zs = 1e-7;
+  double dz_p = urt_friction_eval(&p, &(urt_friction_state_t){zs}, 1e-12).dz;
+  double dz_m = urt_friction_eval(&p, &(urt_friction_state_t){zs}, -1e-12).dz;
+  assert_near(dz_p, dz_m, 1e-11);
 }
 
 static void test_friction__disabled_is_zero(void **state) {
@@ -121,6 +141,7 @@ int main(void) {
       cmocka_unit_test(test_friction__steady_sliding_gives_g_sign_v),
       cmocka_unit_test(test_friction__partials_match_finite_differences),
       cmocka_unit_test(test_friction_dg__stribeck_dip_is_about_minus_3_7),
+      cmocka_unit_test(test_friction__asymmetry_scales_the_coulomb_level_per_direction),
       cmocka_unit_test(test_friction__disabled_is_zero),
       cmocka_unit_test(test_friction_cbrt__is_within_one_ulp_of_cbrtl),
       cmocka_unit_test(test_friction__below_breakaway_a_constant_load_sticks_without_drift),

@@ -133,7 +133,8 @@ def test_printed_values_are_the_files_values(resolved_json, config):
         for key, value in link.items():
             assert got[key] == value, key
     for got, j in zip(resolved_json["joints"], config["joints"]):
-        for key in ("name", "size", "q_min", "q_max", "qd_max", "qdd_max", "torque_max", "q0"):
+        for key in ("name", "size", "q_min", "q_max", "qd_max", "qdd_max", "torque_max", "q0",
+                    "current_offset"):
             assert got[key] == j[key], key
         for block in ("control", "motor", "friction"):
             for key, value in j[block].items():

@@ -76,6 +76,9 @@ typedef struct urt_joint_params {
   double qd_max;           /* speed limit                     [rad/s] */
   double qdd_max;          /* acceleration-command limit      [rad/s²] */
   double torque_max;       /* peak output torque, sets i_max  [N m]   */
+  /* zero offset of the drive's current measurement: the current loop and the reported
+   * current see i + i_offset, the motor carries i (core/joint.cpp)       [A]     */
+  double i_offset;
 } urt_joint_params_t;
 
 /* First-order thermal model of one joint's motor winding, integrated by the controller

@@ -4,10 +4,14 @@
  *
  *   T_f  = σ0 z + σ1 ż               (acts against the joint: T_u = T_CS − T_f)
  *   ż    = q̇ − σ0 |q̇| z / g(q̇)
- *   g(q̇) = f_c [1 + K_s exp(−k_q |q̇| / q̇_s)] + f_v |q̇|^{2/3}     (> 0, even in q̇)
+ *   g(q̇) = f_c,± [1 + K_s exp(−k_q |q̇| / q̇_s)] + f_v |q̇|^{2/3}    (> 0)
+ *   f_c,± = f_c (1 ± a)   for q̇ > 0 / q̇ < 0   (f_c at q̇ = 0, where g does not enter ż)
  *
  * Symbols: z [rad] bristle deflection, σ0 [N m/rad], σ1 [N m s/rad], f_c [N m],
- * f_v [N m (s/rad)^{2/3}], q̇_s [rad/s], K_s, k_q [-].
+ * f_v [N m (s/rad)^{2/3}], q̇_s [rad/s], K_s, k_q [-], a [-] the direction asymmetry of the
+ * Coulomb (and Stribeck) level, |a| < 1. With a = 0, g is even in q̇ (the paper's law) and
+ * every result is bit-for-bit the symmetric one. ż stays continuous through q̇ = 0 for any a:
+ * g enters only through |q̇|/g, which vanishes there from either side.
  * With enabled = 0, T_f = 0 and ż = 0.
  */
 #ifndef URT_DRIVERS_FRICTION_H
@@ -26,6 +30,7 @@ typedef struct urt_friction_params {
   double f_c;        /* Coulomb level                         [N m]        */
   double f_v;        /* viscous level (|q̇|^{2/3} law)         [N m (s/rad)^{2/3}] */
   double k_q;        /* Stribeck shape factor                 [-]          */
+  double asym;       /* direction asymmetry a of f_c, |a| < 1 [-]          */
 } urt_friction_params_t;
 
 typedef struct urt_friction_state {
@@ -39,7 +44,7 @@ typedef struct urt_friction_out {
   double ddz_dqd; /* ∂ż/∂q̇                           [-]        */
 } urt_friction_out_t;
 
-/* g(q̇) of eq. (7). Context: RT. Pure. */
+/* g(q̇) of eq. (7), on the side of q̇'s sign. Context: RT. Pure. */
 double urt_friction_g(const urt_friction_params_t *p, double qd);
 
 /* dg/dq̇; singular at 0 (returns 0 there). Context: any. Pure. */

@@ -39,15 +39,24 @@ static inline double urt__friction_cbrt(double a) {
   return t - res * (r * r) * (1.0 / 3.0);
 }
 
-// g(|q̇|) and |q̇|·g'(|q̇|), which stays finite at rest although g' does not. One exp and one
-// cube root serve both.
-static inline void urt__friction_g_and_vdg(const urt_friction_params_t *p, double v, double *g,
-                                           double *v_dg) {
+// The Coulomb level on the side of q̇'s sign: f_c (1 ± a). With a = 0 it is f_c itself (not
+// f_c · 1.0 computed), so the symmetric law keeps its bits.
+static inline double urt__friction_fc(const urt_friction_params_t *p, double qd) {
+  if (p->asym == 0.0 || qd == 0.0) {
+    return p->f_c;
+  }
+  return p->f_c * (1.0 + (qd > 0.0 ? p->asym : -p->asym));
+}
+
+// g(|q̇|) and |q̇|·g'(|q̇|) for Coulomb level fc, which stays finite at rest although g' does
+// not. One exp and one cube root serve both.
+static inline void urt__friction_g_and_vdg(const urt_friction_params_t *p, double fc, double v,
+                                           double *g, double *v_dg) {
   double e = exp(-p->k_q * v / p->qd_s);
   // |q̇|^{2/3}: the printed q̇^{2/3} is NaN for q̇ < 0 (model.md §1.6)
   double v23 = urt__friction_cbrt(v * v);
-  *g = p->f_c * (1.0 + p->k_static * e) + p->f_v * v23;
-  *v_dg = -p->f_c * p->k_static * (p->k_q / p->qd_s) * e * v + (2.0 / 3.0) * p->f_v * v23;
+  *g = fc * (1.0 + p->k_static * e) + p->f_v * v23;
+  *v_dg = -fc * p->k_static * (p->k_q / p->qd_s) * e * v + (2.0 / 3.0) * p->f_v * v23;
 }
 
 static inline urt_friction_out_t urt_friction_eval_inline(const urt_friction_params_t *p,
@@ -59,7 +68,7 @@ static inline urt_friction_out_t urt_friction_eval_inline(const urt_friction_par
     return out;
   }
   double v = fabs(qd), g, v_dg;
-  urt__friction_g_and_vdg(p, v, &g, &v_dg);
+  urt__friction_g_and_vdg(p, urt__friction_fc(p, qd), v, &g, &v_dg);
 
   // ż = q̇ − σ0 |q̇| z / g
   double r = v / g;

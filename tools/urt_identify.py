@@ -1,0 +1,455 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
+"""Calibrate urtwin to a robot from its own recordings (UR RTDE record.py layout).
+
+  urt_identify.py FILES... --out config/overlays/NAME.yaml [--holdout FILE...]
+                  [--config config/ur5.yaml] [--name NAME] [--max-iter N] [--no-arm]
+
+Fits, by physically bounded least squares (scipy.optimize.least_squares, trust-region
+reflective), the measured motor currents `actual_current_j` against the current a fast
+surrogate of the twin predicts at the recorded set-point (tools/urt_surrogate.py: rigid-body
+torque + reflected motor and gear inertia + the LuGre law in steady sliding, divided by
+k_t·r): per joint that moves (range > 0.05 rad in a file) the Coulomb level f_c, the viscous
+level f_v, the Stribeck level k_static and speed qd_s, the direction asymmetry asym; for every
+joint the current-measurement offset; and the CoMs of links 2–6 (the first moments that set
+the gravity torques of shoulder, elbow and wrists; masses are kept, a CoM is a mass-weighted
+position), each within physical bounds and pulled weakly towards the paper's value so that
+what the recordings cannot see stays the paper's. A Stribeck dip steeper than the gear's output
+damping (the paper's own dip where that is steeper) is penalised: it would self-excite. A payload (payload.mass, payload.cog) is
+fitted when the model has those keys (urt_config prints a `payload` block).
+
+It prints one progress line per iteration, then writes the overlay: only the keys it changed,
+each with value, unit (as urt_config/--print-model prints it), the files it came from and the
+fit's RMS current residual [A] on the joint(s) the key acts on (surrogate, fit files).
+
+--holdout FILE... replays each file through the twin itself (urt_sim --replay FILE --overlay
+OUT --summary-json), with the paper's parameters and with the overlay, and prints the table:
+per joint RMS(measured), RMS(twin − measured), RMS(UR target_current − measured), their ratios,
+and whether the joint moves. Exit status: 0 done, 1 run-time failure (twin replay), 2 usage or
+input error (a bad recording reads file:line: reason).
+"""
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import least_squares
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import urt_recording as rec_io  # noqa: E402
+import urt_surrogate as sur  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+NJ = 6
+MOVE_RANGE = 0.05       # [rad] a joint "moves" in a file beyond this range (issue 10)
+V_MIN = 0.02            # [rad/s] samples of a moving joint slower than this are not fitted
+COM_BOUND = 0.05        # [m] CoM corrections within ± this of the paper's
+COM_PRIOR = 0.02        # [m] scale of the weak pull towards the paper's CoM
+PAYLOAD_PRIOR = 0.5     # [kg] its scale for the payload mass
+PRIOR_WEIGHT = 0.03     # weight of that pull, relative to one normalised current RMS
+FRICTION_NAMES = ("f_c", "f_v", "k_static", "qd_s", "asym")
+FIT_LINKS = (1, 2, 3, 4, 5)  # 0-based: upper arm … link 6
+
+
+class UsageError(Exception):
+    pass
+
+
+def build_dir():
+    return Path(os.environ.get("URT_BUILD", ROOT / "build"))
+
+
+def tool(name):
+    path = build_dir() / "tools" / name
+    if not os.access(path, os.X_OK):
+        raise UsageError(f"{path} is not built (make build, or set URT_BUILD)")
+    return str(path)
+
+
+def resolved(config, sets=()):
+    """The model urtwin resolves (urt_config --json) and its printed units, keyed by generic
+    path ("joints[].friction.f_c"): the units an overlay entry must state."""
+    args = [tool("urt_config"), "--json"] + [a for s in sets for a in ("--set", s)] + [str(config)]
+    js = subprocess.run(args, capture_output=True, text=True)
+    if js.returncode != 0:
+        raise UsageError(js.stderr.strip() or f"urt_config failed on {config}")
+    params = json.loads(js.stdout)
+    return params, params.get("units", {})
+
+
+def unit_of(units, key):
+    """The printed unit of a --set key such as joints.1.friction.f_c or arm.links.2.com."""
+    generic = re.sub(r"\.(\d+)(?=\.|$)", "[]", key)
+    return units.get(generic)
+
+
+#---- the parameter vector ----
+
+class Spec:
+    """The fitted parameters: --set key, vector component, start, bounds, joints it acts on."""
+
+    def __init__(self, params, moving, payload_keys):
+        self.rows = []  # (key, component or None, x0, lo, hi, joints)
+        js = params["joints"]
+        for j in range(NJ):
+            fr = js[j]["friction"]
+            big = js[j]["size"] == "A"
+            if moving[j]:
+                bounds = {"f_c": (0.05, 30.0 if big else 8.0), "f_v": (0.0, 40.0 if big else 10.0),
+                          "k_static": (0.0, 1.0), "qd_s": (0.2, 2.0), "asym": (-0.5, 0.5)}
+                for name in FRICTION_NAMES:
+                    lo, hi = bounds[name]
+                    self.rows.append((f"joints.{j}.friction.{name}", None,
+                                      float(np.clip(fr[name], lo, hi)), lo, hi, (j,)))
+            i_max = js[j]["control"]["i_max"]
+            self.rows.append((f"joints.{j}.current_offset", None, js[j]["current_offset"],
+                              -0.2 * i_max, 0.2 * i_max, (j,)))
+        for i in FIT_LINKS:
+            com = params["arm"]["links"][i]["com"]
+            for c in range(3):
+                self.rows.append((f"arm.links.{i}.com", c, com[c], com[c] - COM_BOUND,
+                                  com[c] + COM_BOUND, tuple(range(i + 1))))
+        if payload_keys:
+            p = params["payload"]
+            self.rows.append(("payload.mass", None, p["mass"], 0.0, 5.0, tuple(range(NJ))))
+            for c in range(3):
+                self.rows.append(("payload.cog", c, p["cog"][c], -0.2, 0.2, tuple(range(NJ))))
+        self.x0 = np.array([r[2] for r in self.rows])
+        self.lo = np.array([r[3] for r in self.rows])
+        self.hi = np.array([r[4] for r in self.rows])
+        # nudge starts off the bounds (least_squares needs them strictly inside)
+        span = self.hi - self.lo
+        self.x0 = np.clip(self.x0, self.lo + 1e-6 * span, self.hi - 1e-6 * span)
+        # the weak pull towards the paper's robot: link CoMs and the payload (none)
+        self.prior = [k for k, r in enumerate(self.rows)
+                      if r[0].startswith("arm.") or r[0].startswith("payload.")]
+        self.prior_scale = np.array([PAYLOAD_PRIOR if self.rows[k][0] == "payload.mass"
+                                     else COM_PRIOR for k in self.prior])
+
+    def unpack(self, x, params):
+        js = params["joints"]
+        fr = {n: np.array([js[j]["friction"][n] for j in range(NJ)], dtype=float)
+              for n in FRICTION_NAMES}
+        off = np.array([js[j]["current_offset"] for j in range(NJ)], dtype=float)
+        links = params["arm"]["links"]
+        mass = [l["mass"] for l in links]
+        com = [list(l["com"]) for l in links]
+        payload = None
+        if "payload" in params:
+            payload = [params["payload"]["mass"], list(params["payload"]["cog"])]
+        for (key, comp, *_), v in zip(self.rows, x):
+            parts = key.split(".")
+            if parts[0] == "joints" and parts[2] == "friction":
+                fr[parts[3]][int(parts[1])] = v
+            elif parts[0] == "joints":
+                off[int(parts[1])] = v
+            elif parts[0] == "arm":
+                com[int(parts[2])][comp] = v
+            elif key == "payload.mass":
+                payload[0] = v
+            else:
+                payload[1][comp] = v
+        return fr, off, mass, com, payload
+
+
+#---- data ----
+
+class FitData:
+    """One recording with its regressor, ready for the surrogate."""
+
+    def __init__(self, rec, arm):
+        self.rec = rec
+        self.name = rec.path.name
+        q, qd, qdd = rec["target_q"], rec["target_qd"], rec["target_qdd"]
+        self.qd, self.qdd = qd, qdd
+        self.i_meas = rec["actual_current"]
+        self.y = arm.regressor(q, qd, qdd)
+        self.moving = (q.max(axis=0) - q.min(axis=0)) > MOVE_RANGE
+        # Near a reversal the set-point's sign of q̇ leads the joint's, and the friction there
+        # (a jump of 2 f_c within µrad of bristle travel) is the twin's dynamics, not the
+        # surrogate's steady law: those samples of a moving joint are left out of the fit.
+        # A joint that never moves in the file keeps all its samples (gravity and offset).
+        self.weight = np.where((np.abs(qd) >= V_MIN) | ~self.moving, 1.0, 0.0)
+
+
+def predict(spec, x, params, arm, drives, fd):
+    fr, off, mass, com, payload = spec.unpack(x, params)
+    tau = fd.y @ arm.pi(mass, com, payload)
+    return sur.current(drives, tau, fd.qd, fd.qdd, fr, off)
+
+
+#---- the fit ----
+
+SLOPE_WEIGHT = 10.0
+_V = 1e-6 * 10.0 ** (7.0 * np.arange(401) / 400.0)  # 1e-6 … 10 rad/s, as model_prepare.cpp
+
+
+def stribeck_slope_min(fr, k_q):
+    """Most negative dg/dq̇ per joint over both directions (core/model_prepare.cpp's search)."""
+    worst = np.zeros(NJ)
+    for side in (1.0, -1.0):
+        fc = fr["f_c"] * (1.0 + side * fr["asym"])
+        e = np.exp(-np.outer(_V, k_q / fr["qd_s"]))
+        dg = -fc * fr["k_static"] * (k_q / fr["qd_s"]) * e + \
+            (2.0 / 3.0) * fr["f_v"] * np.cbrt(1.0 / _V)[:, None]
+        worst = np.minimum(worst, dg.min(axis=0))
+    return worst
+
+
+def stribeck_slope_bound(params):
+    """Per joint: the steepest Stribeck slope allowed [N m s/rad], the gear output damping
+    c_CS (a steeper dip negatively damps the load mode: config/README.md, "Why k_q = 5"), or
+    the paper's own slope where that is already steeper (size A: −14.6 against 13.9)."""
+    return np.array([max(j["gear"]["c_cs"], -s) for j, s in
+                     zip(params["joints"], params["integrator"]["friction_slope_min"])])
+
+
+def fit(files, params, arm, drives, payload_keys, max_iter, quiet=False):
+    moving = np.zeros(NJ, dtype=bool)
+    for fd in files:
+        moving |= fd.moving
+    spec = Spec(params, moving, payload_keys)
+    scale = np.sqrt(np.mean(np.concatenate([fd.i_meas for fd in files]) ** 2, axis=0))
+    scale = np.maximum(scale, 0.05)
+    n_res = sum(fd.weight.sum() for fd in files)
+    x_paper = spec.x0.copy()
+    prior_w = PRIOR_WEIGHT * np.sqrt(n_res / NJ)
+
+    slope_bound = stribeck_slope_bound(params)
+
+    def residuals(x):
+        parts = [(fd.weight * (predict(spec, x, params, arm, drives, fd) - fd.i_meas) /
+                  scale).ravel() for fd in files]
+        # a Stribeck dip steeper than the bound is a self-excited stick-slip, not a fit
+        fr = spec.unpack(x, params)[0]
+        excess = np.maximum(0.0, -stribeck_slope_min(fr, drives.k_q) - slope_bound)
+        parts.append(SLOPE_WEIGHT * np.sqrt(n_res) * excess / slope_bound)
+        parts.append(prior_w * (x[spec.prior] - x_paper[spec.prior]) / spec.prior_scale)
+        return np.concatenate(parts)
+
+    it = [0]
+
+    def progress(intermediate_result):
+        it[0] += 1
+        if not quiet:
+            cost = intermediate_result.cost if hasattr(intermediate_result, "cost") else \
+                0.5 * np.sum(residuals(intermediate_result.x) ** 2)
+            print(f"iteration {it[0]:3d}: cost {cost:.6g}, normalised RMS residual "
+                  f"{np.sqrt(2 * cost / n_res):.4f}", flush=True)
+
+    res = least_squares(residuals, spec.x0, bounds=(spec.lo, spec.hi), method="trf",
+                        x_scale="jac", ftol=1e-10, xtol=1e-10, max_nfev=max_iter,
+                        callback=progress)
+    per_joint = np.sqrt(np.mean(np.concatenate(
+        [predict(spec, res.x, params, arm, drives, fd) - fd.i_meas for fd in files]) ** 2,
+        axis=0))
+    return spec, res, per_joint
+
+
+#---- the overlay ----
+
+def fmt(v):
+    return repr(float(v)) if not isinstance(v, list) else "[" + ", ".join(fmt(a) for a in v) + "]"
+
+
+def changed_keys(spec, x, x_paper):
+    """{key: value} for keys whose value moved (list keys as their full list)."""
+    out = {}
+    for (key, comp, *_), v, v0 in zip(spec.rows, x, x_paper):
+        if comp is None:
+            if abs(v - v0) > 1e-9 * max(1.0, abs(v0)):
+                out[key] = float(v)
+        else:
+            out.setdefault(key, [None, None, None])
+            out[key][comp] = (float(v), abs(v - v0) > 1e-9)
+    for key, val in list(out.items()):
+        if isinstance(val, list):
+            if any(moved for _, moved in val):
+                out[key] = [round(v, 9) for v, _ in val]
+            else:
+                del out[key]
+    return out
+
+
+def write_overlay(path, name, base, argv, spec, res, per_joint, units, files, params):
+    x_paper = np.array([_paper_value(params, r) for r in spec.rows])
+    keys = changed_keys(spec, res.x, x_paper)
+    joints_of = {}
+    for key, _, _, _, _, joints in spec.rows:
+        joints_of[key] = joints
+    from_list = ", ".join(f.path.name for f in files)
+    lines = [
+        "# SPDX-License-Identifier: Apache-2.0",
+        f"# {Path(path).name}: urtwin calibration overlay, written by tools/urt_identify.py.",
+        "# residual: RMS(surrogate current - measured) [A] after the fit, over the `from` files,",
+        "# on the joint the key acts on (for link CoMs and payload: over the joints it moves).",
+        f"overlay: {{name: {name}, base: {Path(base).name}, "
+        f"tool: \"tools/urt_identify.py {' '.join(argv)}\", "
+        f"note: \"bounded least squares on {len(files)} recordings; "
+        f"{res.nfev} evaluations, status {res.status}\"}}",
+        "set:",
+    ]
+    for key, val in keys.items():
+        unit = unit_of(units, key)
+        if unit is None:
+            raise UsageError(f"urt_config prints no unit for {key}")
+        resid = float(np.sqrt(np.mean(per_joint[list(joints_of[key])] ** 2)))
+        lines.append(f"  {key}: {{value: {fmt(val)}, unit: \"{unit}\", from: [{from_list}], "
+                     f"residual: {resid:.4g}}}")
+    if not keys:
+        lines[-1] = "set: {}"
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    Path(path).write_text("\n".join(lines) + "\n")
+    return keys
+
+
+def _paper_value(params, row):
+    key, comp = row[0], row[1]
+    parts = key.split(".")
+    node = params
+    for p in parts:
+        node = node[int(p)] if p.isdigit() else node[p]
+    return node[comp] if comp is not None else node
+
+
+#---- the twin's replay ----
+
+def replay(path, overlay=None, config=None):
+    """The twin's replay summary of one recording (urt_sim --replay … --summary-json)."""
+    sim = tool("urt_sim")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "summary.json"
+        args = [sim, "--quiet", "--replay", str(path), "--summary-json", str(out)]
+        if config:
+            args += ["--config", str(config)]
+        if overlay:
+            args += ["--overlay", str(overlay)]
+        r = subprocess.run(args, capture_output=True, text=True, cwd=ROOT)
+        if r.returncode != 0:
+            raise RuntimeError(f"urt_sim --replay {path} failed ({r.returncode}): "
+                               f"{r.stderr.strip()[-500:]}")
+        return json.loads(out.read_text())
+
+
+def replay_table(path, summary, moving, label):
+    """The replay table as markdown, and whether the twin's error is at most UR's on every
+    moving joint (True when the recording has no target_current to compare with)."""
+    names = ("base", "shoulder", "elbow", "wrist1", "wrist2", "wrist3")
+    f = lambda v, d=3: "-" if v is None else f"{v:.{d}f}"
+    rows = [f"{Path(path).name} ({label}): RMS current [A]",
+            "| joint | moves | RMS meas | RMS(twin-meas) | RMS(UR-meas) | ratio twin | ratio UR |"
+            " corr twin | twin <= UR |",
+            "|---|---|---|---|---|---|---|---|---|"]
+    ok = True
+    for j, js in enumerate(summary["joints"]):
+        ur = js["rms_err_ur"]
+        good = ur is None or js["rms_err_twin"] <= ur
+        if moving[j]:
+            ok &= good
+        verdict = ("yes" if good else "NO") if moving[j] and ur is not None else "-"
+        rows.append(f"| {names[j]} | {'yes' if moving[j] else 'no'} | {f(js['rms_meas'])} | "
+                    f"{f(js['rms_err_twin'])} | {f(ur)} | {f(js['ratio_twin'], 2)} | "
+                    f"{f(js['ratio_ur'], 2)} | {f(js['corr_twin'], 2)} | {verdict} |")
+    return "\n".join(rows), ok
+
+
+#---- main ----
+
+def fit_and_write(recs, out, a, argv, params, units, arm, drives):
+    files = [FitData(r, arm) for r in recs]
+    spec, res, per_joint = fit(files, params, arm, drives, "payload" in params and not a.no_arm,
+                               a.max_iter, a.quiet)
+    name = a.name or Path(out).stem
+    keys = write_overlay(out, name, a.config, argv, spec, res, per_joint, units, recs, params)
+    print(f"wrote {out}: {len(keys)} keys; surrogate RMS residual per joint [A]: "
+          + " ".join(f"{v:.3f}" for v in per_joint))
+    if not a.quiet:
+        for fd in files:
+            err = predict(spec, res.x, params, arm, drives, fd) - fd.i_meas
+            line = f"  {fd.name}: surrogate/UR RMS error per joint [A]:"
+            for j in range(NJ):
+                ur = (np.sqrt(np.mean((fd.rec["target_current"][:, j] - fd.i_meas[:, j]) ** 2))
+                      if fd.rec.has("target_current") else float("nan"))
+                line += f" {np.sqrt(np.mean(err[:, j] ** 2)):.3f}/{ur:.3f}"
+            print(line)
+
+
+def judge(h, overlay, config):
+    """Replay table of holdout h with the paper's parameters and with overlay; True when the
+    twin's RMS current error is at most UR's on every joint that moves."""
+    moving = (h["target_q"].max(axis=0) - h["target_q"].min(axis=0)) > MOVE_RANGE
+    base = replay(h.path, config=config)
+    fitted = replay(h.path, overlay=overlay, config=config)
+    print(replay_table(h.path, base, moving, "paper parameters")[0], flush=True)
+    table, ok = replay_table(h.path, fitted, moving, f"overlay {Path(overlay).name}")
+    print(table, flush=True)
+    print(f"{h.path.name}: twin <= UR on every moving joint with the overlay: "
+          f"{'yes' if ok else 'NO'}", flush=True)
+    return ok
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    ap = argparse.ArgumentParser(prog="urt_identify.py", description=__doc__.split("\n")[0])
+    ap.add_argument("files", nargs="+", help="recordings to fit (record.py layout)")
+    ap.add_argument("--out", required=True,
+                    help="overlay YAML to write (with --leave-one-out: a directory)")
+    ap.add_argument("--holdout", nargs="+", default=[], help="recordings to judge, not fitted")
+    ap.add_argument("--leave-one-out", action="store_true",
+                    help="fit on all FILES but one, judge that one, for each; --out is a "
+                         "directory for the overlays (without-STEM.yaml)")
+    ap.add_argument("--config", default=str(ROOT / "config" / "ur5.yaml"))
+    ap.add_argument("--name", default=None, help="overlay name (default: the file's stem)")
+    ap.add_argument("--max-iter", type=int, default=60, help="function evaluations at most")
+    ap.add_argument("--no-arm", action="store_true",
+                    help="fit friction and offsets only (no link CoMs, no payload)")
+    ap.add_argument("--quiet", action="store_true")
+    try:
+        a = ap.parse_args(argv)
+    except SystemExit as e:
+        return 2 if e.code else 0
+    try:
+        params, units = resolved(a.config)
+        recs = [rec_io.read_recording(f) for f in a.files]
+        holdouts = [rec_io.read_recording(f) for f in a.holdout]
+        overlap = {r.path.resolve() for r in recs} & {h.path.resolve() for h in holdouts}
+        if overlap:
+            raise UsageError(f"{sorted(map(str, overlap))[0]}: in both FILES and --holdout")
+        if a.leave_one_out and (len(recs) < 2 or holdouts):
+            raise UsageError("--leave-one-out needs two or more FILES and no --holdout")
+    except (rec_io.RecordingError, UsageError) as e:
+        print(f"urt_identify: {e}", file=sys.stderr)
+        return 2
+
+    global FIT_LINKS
+    if a.no_arm:
+        FIT_LINKS = ()
+    arm, drives = sur.Arm(params), sur.Drives(params)
+    try:
+        if not a.leave_one_out:
+            fit_and_write(recs, a.out, a, argv, params, units, arm, drives)
+            for h in holdouts:
+                judge(h, a.out, a.config)
+            return 0
+        verdicts = []
+        for k, h in enumerate(recs):
+            out = Path(a.out) / f"without-{h.path.stem}.yaml"
+            print(f"== fold {k + 1}/{len(recs)}: fit without {h.path.name}", flush=True)
+            fit_and_write(recs[:k] + recs[k + 1:], out, a, argv, params, units, arm, drives)
+            verdicts.append((h.path.name, judge(h, out, a.config)))
+        for name, ok in verdicts:
+            print(f"leave-one-out {name}: {'pass' if ok else 'FAIL'}")
+        return 0
+    except (RuntimeError, UsageError) as e:
+        print(f"urt_identify: {e}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
