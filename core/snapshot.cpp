@@ -13,6 +13,7 @@
 //   Jᵀ w = M q̈ + C q̇ + g − (T_CS − T_f), solved with damping near singular poses; it is the
 //   wrench the environment applies (same sign as d->wrench_ext).
 // - elbow: the origin of DH frame 2, on the elbow joint's axis (joint 3 turns about z₂).
+// - tcp_pose, tcp_speed: forward kinematics of the measured q, qd (what a controller knows).
 // - tool_accel: specific force (acceleration minus gravity) of the TCP point, tool frame.
 // - v_robot: the 48 V supply; i_robot = Σ V_j i_j / v_robot (power balance of the drives,
 //   regeneration included); v_main: the same bus.
@@ -113,13 +114,22 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
     s->bristle_z[j] = d->x[j][URT_X_Z];
   }
 
-  // tool: actual (true state) and target, at the active TCP
+  // tool, actual: the forward kinematics of what the encoders measure (s->q, s->qd), as a
+  // controller computes it; the true state creeps by nanometres at rest, which a client
+  // comparing two readings at rest exactly (URCL's target_outside_limits_pose) would see
+  {
+    Mat3 Rm;
+    Vec3 pm;
+    Mat6 Jm;
+    tcp_kinematics(m->arm, c->tcp_offset, vec6(s->q), Rm, pm, &Jm);
+    put_pose(Rm, pm, s->tcp_pose);
+    Eigen::Map<Vec6>{s->tcp_speed} = Jm * vec6(s->qd);
+  }
+  // the physics' own quantities below (wrench, accelerometer) use the true state
   Mat3 R;
   Vec3 p;
   Mat6 J;
   tcp_kinematics(m->arm, c->tcp_offset, q_true, R, p, &J);
-  put_pose(R, p, s->tcp_pose);
-  Eigen::Map<Vec6>{s->tcp_speed} = J * qd_true;
   {
     Mat3 Rt;
     Vec3 pt;

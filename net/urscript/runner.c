@@ -25,6 +25,7 @@
 #define QUEUE_CAP 64
 #define HALT_DECELERATION 4.0  /* [rad/s²] joint deceleration of the stop that ends a program */
 #define SUBMIT_RETRY_TICKS 100
+#define CLOSE_WAIT_MS 250      /* [ms] at most, at a program's end, for the peers to close their ends */
 
 typedef struct unit {
   char *text;
@@ -163,8 +164,9 @@ static void run_main(urt_runner_t *r, const unit *u) {
     report(r, &e, false);
   }
   // the peers see the disconnect now, before the next program dials them (URCL's servers
-  // take one client each: external_control.md §2.1, §6)
-  urt__us_sockets_close_all(r->sockets);
+  // take one client each: external_control.md §2.1, §6): each peer has closed its end, or
+  // CLOSE_WAIT_MS went by
+  urt__us_sockets_close_all_wait(r->sockets, CLOSE_WAIT_MS);
 
   // the end of a program stops the arm (speedj without t, blends, a stop from outside)
   urt_ctrl_cmd_t halt = {.kind = URT_CTRL_HALT, .a = HALT_DECELERATION};

@@ -16,6 +16,7 @@
 #include <string.h>
 #include <strings.h>
 #include <sys/socket.h>
+#include <time.h>
 #include <unistd.h>
 
 us_sockets *urt__us_sockets_new(const char *const *allow, int n) {
@@ -62,6 +63,51 @@ void urt__us_sockets_close_all(us_sockets *t) {
   for (int k = 0; k < US_SOCK_MAX; k++) {
     urt__us_sock_close(&t->s[k]);
   }
+}
+
+/* Shut down every open socket's sending side and wait, at most timeout_ms of wall time in
+ * all, until each peer has closed its end too (a read returns 0 or fails), then close them.
+ * A peer that closes its end has processed the disconnect: URCL's servers take one client
+ * each and accept a new connection before they read the old one's EOF when both arrive in the
+ * same select round, so a program re-sent right after the previous one ended had its sockets
+ * refused ("maximum number of clients ... already connected") unless the old ones were gone
+ * from the server first. A controller takes far longer to start a program than one tick. */
+void urt__us_sockets_close_all_wait(us_sockets *t, int timeout_ms) {
+  if (!t) {
+    return;
+  }
+  struct pollfd pf[US_SOCK_MAX];
+  int n = 0;
+  for (int k = 0; k < US_SOCK_MAX; k++) {
+    us_sock *s = &t->s[k];
+    if (s->state != US_SOCK_FREE && s->fd >= 0 && !s->eof && !s->broken &&
+        shutdown(s->fd, SHUT_WR) == 0) {
+      pf[n] = (struct pollfd){.fd = s->fd, .events = POLLIN};
+      n++;
+    }
+  }
+  struct timespec t0, now;
+  clock_gettime(CLOCK_MONOTONIC, &t0);
+  int open_n = n;
+  while (open_n > 0) {
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    long left = timeout_ms - (long)((now.tv_sec - t0.tv_sec) * 1000 +
+                                    (now.tv_nsec - t0.tv_nsec) / 1000000);
+    if (left <= 0 || poll(pf, (nfds_t)n, (int)left) < 0) {
+      break;
+    }
+    for (int i = 0; i < n; i++) {
+      if (pf[i].fd >= 0 && pf[i].revents) {
+        char buf[4096];
+        ssize_t got = recv(pf[i].fd, buf, sizeof buf, MSG_DONTWAIT);
+        if (got == 0 || (got < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
+          pf[i].fd = -1;  // the peer closed (or the connection broke): done with this one
+          open_n--;
+        }
+      }
+    }
+  }
+  urt__us_sockets_close_all(t);
 }
 
 void urt__us_sockets_free(us_sockets *t) {

@@ -59,6 +59,10 @@ void urt__us_sockets_free(us_sockets *t);
 /* Close every open socket (the end of a program). Nullable: t. */
 void urt__us_sockets_close_all(us_sockets *t);
 
+/* Shut down the sending side of every open socket, wait at most timeout_ms (wall time) for
+ * each peer to close its end, then close them all: the peers have seen the disconnect. */
+void urt__us_sockets_close_all_wait(us_sockets *t, int timeout_ms);
+
 /* The socket named name (connecting or open), or NULL. */
 us_sock *urt__us_sock_find(us_sockets *t, const char *name);
 

@@ -698,7 +698,9 @@ static void test_snapshot__fields_follow_the_physics(void **state) {
   assert_near(g, 9.81, 0.05);
   for (int i = 0; i < 6; i++) {
     assert_near(s.tcp_pose[i], s.tcp_pose_target[i], 1e-3);
-    assert_near(s.tcp_pose[i], r.d->tcp_pose[i], 1e-9);  // model TCP = active TCP here
+    // the measured q's kinematics (tests/core/test_snapshot.c): the true pose within the
+    // encoders' error (model TCP = active TCP here)
+    assert_near(s.tcp_pose[i], r.d->tcp_pose[i], 1e-4);
   }
   assert_near(s.v_robot, 48.0, 1e-12);
   assert_true(isfinite(s.i_robot));

@@ -4,6 +4,7 @@
  * in parts over several ticks, timeouts counted in ticks, a peer that closes, sends as the
  * peer receives them, a refused host. */
 #define _GNU_SOURCE
+#include <pthread.h>
 #include <math.h>
 #include <netinet/tcp.h>
 #include <stdio.h>
@@ -245,6 +246,49 @@ static void test_socket__reopen_and_close(void **state) {
   assert_msg(0, "False", 0);
 }
 
+/* the peer of close_all_wait: reads until EOF, waits 50 ms (a busy server), marks, closes */
+static volatile int peer_closed;
+static void *peer_reads_eof_then_closes(void *arg) {
+  int fd = *(int *)arg;
+  struct pollfd pf = {.fd = fd, .events = POLLIN};
+  char b[64];
+  while (poll(&pf, 1, 5000) > 0 && recv(fd, b, sizeof b, MSG_DONTWAIT) > 0) {
+  }
+  usleep(50000);
+  peer_closed = 1;
+  close(fd);
+  return NULL;
+}
+
+// At a program's end the runner closes its sockets with close_all_wait: it returns only after
+// the peer has seen the EOF and closed its end (URCL's one-client servers must have dropped
+// the old connection before the next program dials them).
+static void test_socket__close_all_wait_returns_after_the_peer_closed(void **state) {
+  must_run("socket_open(\"127.0.0.1\", %d)\nsync()\n");
+  assert_true(X.conn_fd >= 0);
+  int fd = X.conn_fd;
+  X.conn_fd = -1;  // the peer thread owns it now
+  peer_closed = 0;
+  pthread_t th;
+  assert_int_equal(pthread_create(&th, NULL, peer_reads_eof_then_closes, &fd), 0);
+  urt__us_sockets_close_all_wait(T, 5000);
+  assert_true(peer_closed);
+  assert_int_equal(fix_client_fd(&X), -1);
+  pthread_join(th, NULL);
+}
+
+// A peer that never closes does not hold the program's end beyond the bound: the socket is
+// closed all the same.
+static void test_socket__close_all_wait_is_bounded(void **state) {
+  must_run("socket_open(\"127.0.0.1\", %d)\nsync()\n");
+  assert_true(X.conn_fd >= 0);
+  urt__us_sockets_close_all_wait(T, 50);
+  assert_int_equal(fix_client_fd(&X), -1);
+  for (int k = 0; k < US_SOCK_MAX; k++) {
+    assert_int_equal(T->s[k].state, US_SOCK_FREE);
+  }
+}
+
 static void test_socket__bad_arguments_are_runtime_errors(void **state) {
   assert_int_not_equal(run("socket_read_binary_integer(31)\n"), 0);
   assert_non_null(strstr(E.text, "outside 1..30"));
@@ -283,6 +327,8 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_socket__open_refused_port_is_false, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__open_non_loopback_host_is_a_runtime_error, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__reopen_and_close, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__close_all_wait_returns_after_the_peer_closed, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__close_all_wait_is_bounded, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__bad_arguments_are_runtime_errors, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__no_table_is_a_runtime_error, setup, teardown),
   };
