@@ -1,18 +1,20 @@
 # SPDX-License-Identifier: Apache-2.0
 """Shared fixtures: the urtwin shared library, the UR5 model loaded through it, and the same
-model's resolved parameters from urt_config. Tests that need a missing build artefact skip."""
+model's resolved parameters from urt_config. A missing build artefact fails (built.py)."""
 
 import os
 
 import pytest
 
+import built
 import urtwin_ctypes as urt
 
 
 @pytest.fixture(scope="session")
 def urtwin_lib():
     if not os.path.exists(urt.LIBURTWIN):
-        pytest.skip(f"{urt.LIBURTWIN} is not built (set URT_BUILD to the cmake build dir)")
+        pytest.fail(f"{urt.LIBURTWIN} is not built (set URT_BUILD to the cmake build dir)",
+                    pytrace=False)
     return urt.load_library()
 
 
@@ -24,6 +26,5 @@ def ur5(urtwin_lib):
 
 @pytest.fixture(scope="session")
 def ur5_params():
-    if not os.access(urt.URT_CONFIG, os.X_OK):
-        pytest.skip(f"{urt.URT_CONFIG} is not built")
+    built.require(urt.URT_CONFIG)
     return urt.resolved_model(urt.UR5_YAML)

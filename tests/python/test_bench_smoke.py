@@ -15,14 +15,15 @@ from pathlib import Path
 
 import pytest
 
+import built
+
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("URT_BUILD", ROOT / "build"))
 URT_BENCH = BUILD / "tools" / "urt_bench"
 STATS = ("median_us", "p99_us", "p999_us", "max_us", "mean_us", "min_us", "rtf",
          "wall_s_per_sim_s")
 
-pytestmark = pytest.mark.skipif(not os.access(URT_BENCH, os.X_OK),
-                                reason=f"{URT_BENCH} is not built")
+built.require(URT_BENCH)
 
 
 def mujoco_lib():

@@ -27,7 +27,7 @@ def fixture_vec(k, n=6):
 @pytest.fixture(scope="module")
 def dump():
     if not os.access(DUMP, os.X_OK):
-        pytest.skip(f"{DUMP} is not built")
+        pytest.fail(f"{DUMP} is not built: run make build", pytrace=False)
 
     def run(kind, version, tmp_path):
         out = tmp_path / f"{kind}-{version}.bin"
@@ -149,7 +149,7 @@ def test_rt_packet_is_read_by_urx(dump, tmp_path, version, size):
 
 def _frame(text, max_unit=0):
     if not os.access(DUMP, os.X_OK):
-        pytest.skip(f"{DUMP} is not built")
+        pytest.fail(f"{DUMP} is not built: run make build", pytrace=False)
     out = subprocess.run([str(DUMP), "frame", str(max_unit)], input=text, check=True,
                          capture_output=True).stdout.decode()
     return [line.split(" ", 5) for line in out.splitlines()]

@@ -14,6 +14,8 @@ import subprocess
 from pathlib import Path
 
 import pytest
+
+import built
 import yaml
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -21,8 +23,7 @@ BUILD = Path(os.environ.get("URT_BUILD", ROOT / "build"))
 URT_CONFIG = BUILD / "tools" / "urt_config"
 UR5 = ROOT / "config" / "ur5.yaml"
 
-pytestmark = pytest.mark.skipif(not os.access(URT_CONFIG, os.X_OK),
-                                reason=f"{URT_CONFIG} is not built")
+built.require(URT_CONFIG)
 
 
 def run(*args):

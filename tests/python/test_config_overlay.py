@@ -10,6 +10,8 @@ import subprocess
 from pathlib import Path
 
 import pytest
+
+import built
 import yaml
 
 import urtwin_ctypes as urt
@@ -21,8 +23,7 @@ URT_SIM = BUILD / "tools" / "urt_sim"
 URTWIN = BUILD / "tools" / "urtwin"
 UR5 = ROOT / "config" / "ur5.yaml"
 
-pytestmark = pytest.mark.skipif(not os.access(URT_CONFIG, os.X_OK),
-                                reason=f"{URT_CONFIG} is not built")
+built.require(URT_CONFIG)
 
 OVERLAY = """\
 overlay: {name: test, base: ur5.yaml, tool: "hand", note: "a test"}
@@ -165,8 +166,8 @@ def test_overlay__unit_after_its_remark_and_syntax_errors(tmp_path):
         f"{tmp_path}/none.yaml: cannot open")
 
 
-@pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} is not built")
 def test_overlay__urtwin_refuses_a_bad_overlay_before_serving(tmp_path):
+    built.require(URTWIN)
     ov = write(tmp_path, "bad.yaml", "set:\n  joints.1.friction.f_c: 0\n")
     err = refused(URTWIN, "--config", UR5, "--overlay", ov, "--port-offset", "23456")
     assert err == f"{ov}:2: joints[1].friction.f_c: must be > 0 (got 0)"

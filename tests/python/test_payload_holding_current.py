@@ -21,11 +21,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+import built
+
 import urtwin_ctypes as urt
 from test_arm_pinocchio import build_pinocchio
 from urtwin_proc import Emulator, RtReader, URTWIN
 
-pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+built.require(URTWIN)
 
 POSES = [[0.0, -1.2, 1.0, -1.4, -1.5708, 0.0],
          [0.5, -0.3, 0.4, -0.8, 1.0, 0.5],

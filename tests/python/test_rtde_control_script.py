@@ -42,7 +42,7 @@ def unit(major, minor, off_int, off_float, path=""):
 
 def check(text):
     if not os.access(PROBE, os.X_OK):
-        pytest.skip(f"{PROBE} is not built")
+        pytest.fail(f"{PROBE} is not built: run make build", pytrace=False)
     out = subprocess.run([str(PROBE)], input=text.encode(), capture_output=True, check=True)
     return json.loads(out.stdout)
 

@@ -14,10 +14,12 @@ import time
 
 import pytest
 
+import built
+
 from rtde_client import RecipeError, RtdeClient
 from urtwin_proc import URTWIN, Emulator
 
-pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+built.require(URTWIN)
 
 # the first e-Series that has both outputs (actual_current_as_torque 5.23, target_gravity 5.24)
 VERSION = "5.25"

@@ -10,10 +10,12 @@ import time
 
 import pytest
 
+import built
+
 from rtde_client import RecipeError, RtdeClient, pack_package
 from urtwin_proc import Emulator, URTWIN
 
-pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+built.require(URTWIN)
 
 
 def count_for(client, seconds):

@@ -11,12 +11,14 @@ import time
 
 import pytest
 
+import built
+
 import urtwin_ctypes as urt
 from urtwin_proc import Emulator, RtReader, URTWIN
 
 rtde_control = pytest.importorskip("rtde_control")
 rtde_receive = pytest.importorskip("rtde_receive")
-pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+built.require(URTWIN)
 
 # the version whose pruned script keeps every command (direct torque and the dynamics getters
 # exist from 5.23; ur_rtde removes them from the script it sends to older controllers)

@@ -13,12 +13,14 @@ import time
 
 import pytest
 
+import built
+
 from urtwin_proc import Emulator, RtReader, URTWIN
 
 rtde_receive = pytest.importorskip("rtde_receive")
 rtde_io = pytest.importorskip("rtde_io")
 dashboard_client = pytest.importorskip("dashboard_client")
-pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+built.require(URTWIN)
 
 
 class RtRecorder:

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+import built
 import yaml
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -23,7 +25,7 @@ TOOL = ROOT / "tools" / "urt_identify.py"
 sys.path.insert(0, str(ROOT / "tools"))
 import urt_recording  # noqa: E402
 
-pytestmark = pytest.mark.skipif(not os.access(URT_SIM, os.X_OK), reason=f"{URT_SIM} is not built")
+built.require(URT_SIM)
 
 # the robot the synthetic recording comes from: the paper's, with these changed (every
 # Stribeck slope within the bound urt_identify enforces: elbow f_v 5 would make its dip

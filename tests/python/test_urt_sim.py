@@ -10,13 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import built
+
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("URT_BUILD", ROOT / "build"))
 URT_SIM = BUILD / "tools" / "urt_sim"
 CONFIG = ROOT / "config" / "ur5.yaml"
 COLS = ("q_set", "q", "qd", "qm", "qdm", "i", "i_meas", "v", "tcs", "tf")
 
-pytestmark = pytest.mark.skipif(not os.access(URT_SIM, os.X_OK), reason=f"{URT_SIM} is not built")
+built.require(URT_SIM)
 
 
 def sim(*args, ok=True):

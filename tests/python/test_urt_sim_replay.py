@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import built
+
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("URT_BUILD", ROOT / "build"))
 URT_SIM = BUILD / "tools" / "urt_sim"
@@ -19,7 +21,7 @@ CONFIG = ROOT / "config" / "ur5.yaml"
 Q0 = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
 NJ = 6
 
-pytestmark = pytest.mark.skipif(not os.access(URT_SIM, os.X_OK), reason=f"{URT_SIM} is not built")
+built.require(URT_SIM)
 
 
 def sim(*args, ok=True):

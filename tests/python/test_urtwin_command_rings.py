@@ -18,9 +18,11 @@ import time
 
 import pytest
 
+import built
+
 from urtwin_proc import URTWIN, Emulator, RtReader
 
-pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+built.require(URTWIN)
 FLOOD = os.path.join(os.path.dirname(__file__), "rtde_input_client.py")
 
 # command, its answer, the robot mode it leads to

@@ -21,10 +21,12 @@ import time
 
 import pytest
 
+import built
+
 from rtde_client import RtdeClient
 from urtwin_proc import URTWIN, Emulator, RtReader
 
-pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+built.require(URTWIN)
 rtde_receive = pytest.importorskip("rtde_receive")
 
 PORTS = (30001, 30002, 30003, 30011, 30012, 30013, 30004, 29999)

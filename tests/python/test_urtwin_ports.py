@@ -10,9 +10,11 @@ import time
 
 import pytest
 
+import built
+
 from urtwin_proc import (Emulator, PrimaryReader, RtReader, URTWIN, decode_rt)
 
-pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+built.require(URTWIN)
 
 
 def stream(host, seconds, port=30003):

@@ -10,10 +10,12 @@ import time
 
 import pytest
 
+import built
+
 from urtwin_proc import Emulator, RtReader, URTWIN
 
 urx = pytest.importorskip("urx")
-pytestmark = pytest.mark.skipif(not os.access(URTWIN, os.X_OK), reason=f"{URTWIN} not built")
+built.require(URTWIN)
 
 
 def test_urx_getj_movej_and_realtime_monitor():
