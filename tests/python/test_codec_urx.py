@@ -16,8 +16,8 @@ ROOT = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("URT_BUILD", ROOT / "build"))
 DUMP = BUILD / "tests" / "net" / "codec" / "urt_codec_dump"
 
-urx_secmon = pytest.importorskip("urx.ursecmon")
-urx_rtmon = pytest.importorskip("urx.urrtmon")
+import urx.ursecmon as urx_secmon
+import urx.urrtmon as urx_rtmon
 
 
 def fixture_vec(k, n=6):
@@ -156,7 +156,7 @@ def _frame(text, max_unit=0):
 
 
 def test_ur_rtde_control_script_is_one_program():
-    script_client = pytest.importorskip("script_client")
+    import script_client
     body = script_client.ScriptClient("127.0.0.1", 5, 23).getScript()
     # ur_rtde injects the register offsets after the comment, at the start of the next line
     body = body.replace("# float register offset\n", "# float register offset\n0")

@@ -19,7 +19,7 @@ import urtwin_ctypes as urt
 from rtde_client import RtdeClient
 from urtwin_proc import Emulator, PrimaryReader
 
-script_client = pytest.importorskip("script_client")
+import script_client
 
 PROBE = urt.BUILD / "tests" / "net" / "urscript" / "urscript_check_probe"
 

@@ -17,9 +17,9 @@ import built
 
 from urtwin_proc import Emulator, RtReader, URTWIN
 
-rtde_receive = pytest.importorskip("rtde_receive")
-rtde_io = pytest.importorskip("rtde_io")
-dashboard_client = pytest.importorskip("dashboard_client")
+import rtde_receive
+import rtde_io
+import dashboard_client
 built.require(URTWIN)
 
 

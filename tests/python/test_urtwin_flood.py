@@ -27,7 +27,7 @@ from rtde_client import RtdeClient
 from urtwin_proc import URTWIN, Emulator, RtReader
 
 built.require(URTWIN)
-rtde_receive = pytest.importorskip("rtde_receive")
+import rtde_receive
 
 PORTS = (30001, 30002, 30003, 30011, 30012, 30013, 30004, 29999)
 PERIOD = 0.002

@@ -14,7 +14,7 @@ import built
 
 from urtwin_proc import Emulator, RtReader, URTWIN
 
-urx = pytest.importorskip("urx")
+import urx
 built.require(URTWIN)
 
 
