@@ -163,14 +163,15 @@ static void run_main(urt_runner_t *r, const unit *u) {
   if (urt__us_run(p, &h, &e) != 0) {
     report(r, &e, false);
   }
+  // the end of a program stops the arm (speedj without t, blends, a stop from outside), at
+  // once: not after the wait for the peers below
+  urt_ctrl_cmd_t halt = {.kind = URT_CTRL_HALT, .a = HALT_DECELERATION};
+  submit_retry(r, &halt);
+
   // the peers see the disconnect now, before the next program dials them (URCL's servers
   // take one client each: external_control.md §2.1, §6): each peer has closed its end, or
   // CLOSE_WAIT_MS went by
   urt__us_sockets_close_all_wait(r->sockets, CLOSE_WAIT_MS);
-
-  // the end of a program stops the arm (speedj without t, blends, a stop from outside)
-  urt_ctrl_cmd_t halt = {.kind = URT_CTRL_HALT, .a = HALT_DECELERATION};
-  submit_retry(r, &halt);
   set_state(r, URT_PROGRAM_STOPPED);
   emit_key(r, "PROGRAM_XXX_STOPPED", p->name);
   urt__us_prog_free(p);
