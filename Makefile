@@ -8,7 +8,9 @@
 #   make fuzz   the libFuzzer targets for longer (FUZZ_SECONDS=600 each)
 #   make bench  urt_step against MuJoCo mj_step and Pinocchio ABA (build/bench.json), then the
 #               running emulator: 30003 jitter with 8 clients, overruns, memory (bench_ports.json),
-#               DDS off vs on with 8 subscribers: latency tick -> subscriber, overruns (bench_dds.json)
+#               DDS off vs on with 8 subscribers: latency tick -> subscriber, overruns (bench_dds.json),
+#               the physics thread's time per period idle and under movel + a command flood
+#               (bench_physics_worst.json)
 
 SHELL := /bin/bash
 JOBS ?= $(shell nproc)
@@ -153,6 +155,7 @@ bench: build
 	URT_BUILD=$(abspath build) $(PY) tools/bench.py --out build/bench.json
 	URT_BUILD=$(abspath build) $(PY) tools/bench_ports.py --out build/bench_ports.json
 	URT_BUILD=$(abspath build) $(PY) tools/bench_dds.py --out build/bench_dds.json
+	URT_BUILD=$(abspath build) $(PY) tools/bench_physics_worst.py --out build/bench_physics_worst.json
 
 # the full 10 s excitation comparison against CVODE, noise off, at 20 and 10 kHz (slow: about
 # 7 minutes each on one core)

@@ -2,7 +2,8 @@
  * core/loop.c — the hard real-time loop (loop.h). One physics thread owns urt_data_t and
  * urt_ctrl_t; everything else talks to it through command rings (in) and a seqlocked snapshot
  * history (out). Inside the cycle: no allocation, no locks, no printing; the only system calls
- * are the pacing sleep, clock reads (vDSO) and a futex wake when a reader sleeps.
+ * are the pacing sleep, clock reads (vDSO, plus one CLOCK_THREAD_CPUTIME_ID read per period: a
+ * short non-blocking call) and a futex wake when a reader sleeps.
  */
 #define _GNU_SOURCE
 #include "urt/loop.h"
@@ -22,6 +23,7 @@
 #include <unistd.h>
 
 #include "urt/core.h"
+#include "urt/exec_hist.h"
 #include "urt/seqlock.h"
 #include "urt/spsc_ring.h"
 #include "urt/thread.h"
@@ -68,6 +70,9 @@ struct urt_loop {
   /* statistics */
   _Atomic uint64_t overruns, missed_periods;
   _Atomic uint64_t exec_last_ns, exec_max_ns;
+  urt_exec_hist_t exec_hist;        /* wall time of each period's work             */
+  urt_exec_hist_t cpu_hist;         /* the thread's CPU time per period            */
+  _Atomic uint64_t refined_steps;   /* copy of d.refined_count for other threads   */
 
   pthread_t thread;
   _Atomic int stop;
@@ -314,6 +319,14 @@ void urt_loop_get_stats(const urt_loop_t *l, urt_loop_stats_t *out) {
   out->cmd_dropped = dropped;
   out->exec_last = atomic_load(&l->exec_last_ns) * 1e-9;
   out->exec_max = atomic_load(&l->exec_max_ns) * 1e-9;
+  out->exec_p50 = urt_exec_hist_quantile(&l->exec_hist, 0.50);
+  out->exec_p99 = urt_exec_hist_quantile(&l->exec_hist, 0.99);
+  out->exec_p999 = urt_exec_hist_quantile(&l->exec_hist, 0.999);
+  out->cpu_p50 = urt_exec_hist_quantile(&l->cpu_hist, 0.50);
+  out->cpu_p99 = urt_exec_hist_quantile(&l->cpu_hist, 0.99);
+  out->cpu_p999 = urt_exec_hist_quantile(&l->cpu_hist, 0.999);
+  out->cpu_max = urt_exec_hist_max(&l->cpu_hist);
+  out->refined_steps = atomic_load_explicit(&l->refined_steps, memory_order_relaxed);
 }
 
 //---- the physics thread ----
@@ -441,11 +454,18 @@ static bool wait_for_grant(urt_loop_t *l, uint64_t done) {
   return false;
 }
 
+static int64_t thread_cpu_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
 static void *physics_main(void *arg) {
   urt_loop_t *l = arg;
   rt_setup(&l->cfg);
   const urt_pacing_t pacing = l->cfg.pacing;
   int64_t anchor = now_ns();  // wall time of tick 0
+  int64_t cpu_prev = thread_cpu_ns();
   uint64_t tick = 0;
   while (!atomic_load_explicit(&l->stop, memory_order_relaxed)) {
     if (pacing == URT_PACING_LOCKSTEP && !wait_for_grant(l, tick)) {
@@ -471,6 +491,13 @@ static void *physics_main(void *arg) {
     if ((uint64_t)exec > atomic_load_explicit(&l->exec_max_ns, memory_order_relaxed)) {
       atomic_store_explicit(&l->exec_max_ns, (uint64_t)exec, memory_order_relaxed);
     }
+    // wall time counts what preempted the thread too; its CPU time (this period's work and the
+    // previous period's pacing, which costs next to nothing) is the work alone
+    urt_exec_hist_add(&l->exec_hist, (uint64_t)exec);
+    int64_t cpu = thread_cpu_ns();
+    urt_exec_hist_add(&l->cpu_hist, (uint64_t)(cpu - cpu_prev));
+    cpu_prev = cpu;
+    atomic_store_explicit(&l->refined_steps, l->d.refined_count, memory_order_relaxed);
     if (pacing == URT_PACING_TICK || pacing == URT_PACING_STEP) {
       // tick k's work belongs to wall interval [anchor + (k-1)·P, anchor + k·P)
       int64_t deadline = anchor + (int64_t)tick * l->period_ns;

@@ -78,6 +78,19 @@ void print_ring_drops(const urt_loop_t* loop) {
   std::fprintf(stderr, "urtwin: commands dropped per ring: %s\n", line.c_str());
 }
 
+// One line: the physics thread's time per controller period so far, wall clock (counts time
+// it was preempted) and its own CPU time, as quantiles and maximum, also as shares of the period.
+void print_exec_stats(const urt_loop_stats_t& s, double period) {
+  std::fprintf(stderr,
+               "urtwin: physics per period: wall p50 %.0f us p99 %.0f us p99.9 %.0f us max %.0f us "
+               "(max %.1f %% of %.0f us); cpu p50 %.0f us p99 %.0f us p99.9 %.0f us max %.0f us "
+               "(max %.1f %%); refined steps %llu\n",
+               s.exec_p50 * 1e6, s.exec_p99 * 1e6, s.exec_p999 * 1e6, s.exec_max * 1e6,
+               100.0 * s.exec_max / period, period * 1e6, s.cpu_p50 * 1e6, s.cpu_p99 * 1e6,
+               s.cpu_p999 * 1e6, s.cpu_max * 1e6, 100.0 * s.cpu_max / period,
+               (unsigned long long)s.refined_steps);
+}
+
 // Raise the soft descriptor limit to the hard one: the caps, not a distribution's default of
 // 1024, should be what refuses clients (8 ports at the cap hold 256). Best effort.
 void raise_nofile_limit() {
@@ -447,6 +460,7 @@ int main(int argc, char** argv) {
                    (unsigned long long)es.clients, (unsigned long long)es.refused_cap,
                    (unsigned long long)es.refused_fds, (unsigned long long)(es.out_bytes / 1024),
                    (unsigned long long)es.out_refused);
+      print_exec_stats(s, urt_loop_period(loop));
       print_ring_drops(loop);
       if (dds) {
         print_dds_stats(dds);
@@ -468,6 +482,7 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",
                (unsigned long long)s.ticks, (unsigned long long)s.overruns,
                (unsigned long long)s.missed_periods);
+  print_exec_stats(s, urt_loop_period(loop));
   print_ring_drops(loop);
   urt_dds_bridge_destroy(dds);
   urt_lcm_bridge_destroy(bridge);

@@ -88,9 +88,15 @@ static void test_loop__tick_pacing_follows_wall_time(void **state) {
   double wall = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
   urt_loop_stats_t st;
   urt_loop_get_stats(l, &st);
-  print_message("250 ticks at 500 Hz took %.3f s of wall time, %llu overruns\n", wall,
-                (unsigned long long)st.overruns);
+  print_message("250 ticks at 500 Hz took %.3f s of wall time, %llu overruns; physics per "
+                "period wall p50 %.1f us p99 %.1f us max %.1f us, cpu p99 %.1f us max %.1f us\n",
+                wall, (unsigned long long)st.overruns, st.exec_p50 * 1e6, st.exec_p99 * 1e6,
+                st.exec_max * 1e6, st.cpu_p99 * 1e6, st.cpu_max * 1e6);
   assert_int_equal(gaps, 0);
+  // the per-period figures are ordered, and nonzero: every tick steps the model
+  assert_true(st.exec_p50 > 0.0 && st.exec_p50 <= st.exec_p99 && st.exec_p99 <= st.exec_p999);
+  assert_true(st.exec_p999 <= st.exec_max);
+  assert_true(st.cpu_p50 > 0.0 && st.cpu_p99 <= st.cpu_max);
   // simulation never runs ahead of the wall clock by more than the period being computed; when
   // the machine is too slow to keep up (sanitizers, load), the lateness is counted, not hidden
   // (judged at twice the ideal wall time: this reader can itself be preempted for a while)

@@ -120,3 +120,26 @@ def test_bench_py__merges_everything_into_one_json(tmp_path):
     assert rp["runs"] == 1 and rp["duration_s"] == 8.0
     assert math.isfinite(rp["speed_median"]) and rp["speed_median"] > 0
     assert "urt_sim --replay" in proc.stdout
+
+
+def test_bench_physics_worst__reports_ordered_figures_and_the_motion_ran(tmp_path):
+    """tools/bench_physics_worst.py: both runs give ordered per-period quantiles from the
+    emulator itself, the loaded run really moved (movel) and really flooded (RTDE inputs)."""
+    out = tmp_path / "worst.json"
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "tools" / "bench_physics_worst.py"), "--seconds", "2",
+         "--host", "127.0.0.81", "--out", str(out)],
+        capture_output=True, text=True, cwd=ROOT, timeout=120,
+        env={**os.environ, "URT_BUILD": str(BUILD)})
+    assert proc.returncode == 0, proc.stderr + proc.stdout
+    res = json.loads(out.read_text())
+    for name in ("idle", "loaded"):
+        r = res[name]
+        assert r["period_us"] == 2000
+        for series in ("wall_us", "cpu_us"):
+            q = r[series]
+            assert 0 < q["p50"] <= q["p99"] <= q["p999"] <= q["max"], (name, series, q)
+    loaded = res["loaded"]
+    assert loaded["tcp_x_travel_m"] > 0.05  # movel moved the TCP (0.15 m per leg)
+    assert loaded["rtde_inputs_per_s"] > 1000 and loaded["dashboard_answered"] > 0
+    assert res["idle"]["tcp_x_travel_m"] < 1e-3

@@ -129,7 +129,12 @@ void urt_loop_grant(urt_loop_t *l, uint64_t n);
 /* Loop statistics (any thread). */
 typedef struct urt_loop_stats {
   uint64_t ticks, overruns, missed_periods, cmd_dropped;
-  double exec_max, exec_last;   /* physics time per period [s] */
+  double exec_max, exec_last;   /* physics time per period, wall clock [s] */
+  /* quantiles of every period so far (urt/exec_hist.h: within 1/16 above the true value) of
+   * the wall time (includes time the thread was preempted) and of the thread's CPU time [s] */
+  double exec_p50, exec_p99, exec_p999;
+  double cpu_p50, cpu_p99, cpu_p999, cpu_max;
+  uint64_t refined_steps;       /* physics steps redone as sub-steps (urt_step) */
 } urt_loop_stats_t;
 void urt_loop_get_stats(const urt_loop_t *l, urt_loop_stats_t *out);
 
