@@ -400,6 +400,30 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       }
       break;
     }
+    case URT_CTRL_SET_INPUTS: {
+      // the levels the outside world puts on the inputs: a mask outside the 18 pins, bits
+      // outside the mask, or an analog value a UR input cannot read (0–10 V) is refused whole
+      const double amask = cmd->a, bits = cmd->value;
+      bool ok = cmd->index >= 0 && cmd->index < (1 << 18) && amask >= 0.0 && amask < 16.0 &&
+                amask == std::floor(amask) && bits >= 0.0 && bits < (1 << 18) &&
+                bits == std::floor(bits) && (static_cast<uint32_t>(bits) & ~cmd->index) == 0;
+      const uint32_t am = ok ? static_cast<uint32_t>(amask) : 0;
+      for (int k = 0; k < 4 && ok; k++) {
+        ok = !(am & (1u << k)) || (cmd->q[k] >= 0.0 && cmd->q[k] <= 10.0);
+      }
+      if (!ok) {
+        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
+        break;
+      }
+      const uint32_t mask = static_cast<uint32_t>(cmd->index);
+      c->digital_in = (c->digital_in & ~mask) | static_cast<uint32_t>(bits);
+      for (int k = 0; k < 4; k++) {
+        if (am & (1u << k)) {
+          (k < 2 ? c->analog_in[k] : c->tool_analog_in[k - 2]) = cmd->q[k];
+        }
+      }
+      break;
+    }
     case URT_CTRL_SET_TOOL_VOLTAGE:
       // set_tool_voltage: the three supplies a UR tool connector has
       if (cmd->value != 0.0 && cmd->value != 12.0 && cmd->value != 24.0) {

@@ -20,7 +20,8 @@
 // - program_state: the runner's, shown as PAUSED while the controller is paused over PLAYING;
 //   speed_scaling: the slider's scaling times the pause's; control_mode (RTDE): 0 position,
 //   1 teach (freedrive), 2 force, 3 torque; m_target of a torque-controlled joint: its command.
-// - digital_in: 0 (no inputs are modelled). Loop diagnostics (exec_time, overruns, …) are zero
+// - digital_in, analog_in, tool_analog_in: the levels set from outside (URT_CTRL_SET_INPUTS:
+//   LCM, urtwin --io), all in voltage mode, as the primary interface reports. Loop diagnostics (exec_time, overruns, …) are zero
 //   here: the loop writes them after this call.
 #include <cmath>
 #include <cstring>
@@ -232,7 +233,9 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   s->i_robot = v_bus > 0.0 ? power / v_bus : 0.0;
 
   // I/O and modes
-  s->digital_in = 0;
+  s->digital_in = c->digital_in;
+  std::memcpy(s->analog_in, c->analog_in, sizeof s->analog_in);
+  std::memcpy(s->tool_analog_in, c->tool_analog_in, sizeof s->tool_analog_in);
   s->digital_out = c->digital_out;
   s->analog_out[0] = c->analog_out[0];
   s->analog_out[1] = c->analog_out[1];

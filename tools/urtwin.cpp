@@ -17,9 +17,11 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "io_script.h"
 #include "urt/core.h"
 #include "urt/loop.h"
 #include "urt/net/emulator.h"
@@ -63,6 +65,7 @@ struct Options {
   std::string serial_number = "20235501783";
   std::string external_control_host = "127.0.0.1:50002";  // the URCap's host IP and port
   double stats_every = 10.0;    // seconds between loop statistics lines (0: never)
+  std::string io_file;          // --io: a timed script of input levels (tools/io_script.h)
   std::vector<std::string> script_allow_hosts;
   int max_clients = URT_EMULATOR_MAX_CLIENTS;
   double out_budget_mib = URT_EMULATOR_OUT_BUDGET / 1048576.0;
@@ -157,6 +160,21 @@ long resident_kib() {
 
 // one line the tests parse: "urtwin: dds: ticks N lost N drive N/N lost N, write errors N,
 // commands received N accepted N invalid N refused N dropped N"
+void print_lcm_stats(const urt_lcm_bridge_t* b) {
+  urt_lcm_stats_t n;
+  urt_lcm_bridge_get_stats(b, &n);
+  std::fprintf(stderr,
+               "urtwin: lcm: status %llu (lost ticks %llu), drive %llu, publish errors %llu, "
+               "commands received %llu accepted %llu rejected %llu dropped %llu, inputs "
+               "received %llu accepted %llu rejected %llu dropped %llu\n",
+               (unsigned long long)n.status_sent, (unsigned long long)n.ticks_lost,
+               (unsigned long long)n.drive_sent, (unsigned long long)n.publish_errors,
+               (unsigned long long)n.cmd_received, (unsigned long long)n.cmd_accepted,
+               (unsigned long long)n.cmd_rejected, (unsigned long long)n.cmd_dropped,
+               (unsigned long long)n.io_received, (unsigned long long)n.io_accepted,
+               (unsigned long long)n.io_rejected, (unsigned long long)n.io_dropped);
+}
+
 void print_dds_stats(const urt_dds_bridge_t* b) {
   urt_dds_stats_t d;
   urt_dds_bridge_get_stats(b, &d);
@@ -205,7 +223,7 @@ int main(int argc, char** argv) {
   app.add_flag("--lcm", o.lcm, "publish status and drive messages on LCM, take commands");
   app.add_option("--lcm-url", o.lcm_url, "LCM provider URL (ttl=0 keeps traffic on this host)")
       ->capture_default_str();
-  app.add_option("--lcm-prefix", o.lcm_prefix, "channel prefix: PREFIX_STATUS, _DRIVE, _COMMAND")
+  app.add_option("--lcm-prefix", o.lcm_prefix, "channel prefix: PREFIX_STATUS, _DRIVE, _COMMAND, _IO")
       ->capture_default_str();
   app.add_flag("--dds", o.dds, "publish the UR ROS 2 driver's topics on Cyclone DDS, take "
                "forward and trajectory commands");
@@ -254,6 +272,9 @@ int main(int argc, char** argv) {
                                                      : std::string("expected IPv4:PORT");
       })
       ->capture_default_str();
+  app.add_option("--io", o.io_file,
+                 "a YAML script of timed input levels (digital and analog inputs) played in "
+                 "controller time: tools/io_script.h");
   app.add_option("--stats-every", o.stats_every, "seconds between loop statistics lines (0: never)")
       ->capture_default_str();
   app.add_option("--max-clients", o.max_clients,
@@ -321,6 +342,15 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  std::vector<IoEvent> io_events;
+  if (!o.io_file.empty()) {
+    std::string ierr;
+    if (!io_script_load(o.io_file, &io_events, &ierr)) {
+      std::fprintf(stderr, "urtwin: --io: %s\n", ierr.c_str());
+      return 2;
+    }
+  }
+
   urt_model_t* m = nullptr;
   char err[512];
   std::vector<const char*> overlays;
@@ -386,10 +416,11 @@ int main(int argc, char** argv) {
     urt_lcm_config_default(&bc);
     bc.url = o.lcm_url.c_str();
     std::string st = o.lcm_prefix + "_STATUS", dr = o.lcm_prefix + "_DRIVE",
-                cm = o.lcm_prefix + "_COMMAND";
+                cm = o.lcm_prefix + "_COMMAND", io = o.lcm_prefix + "_IO";
     bc.status_channel = st.c_str();
     bc.drive_channel = dr.c_str();
     bc.command_channel = cm.c_str();
+    bc.io_channel = io.c_str();
     bc.lockstep = lc.pacing == URT_PACING_LOCKSTEP;
     if (urt_lcm_bridge_create(loop, &bc, &bridge, err, sizeof err) != 0) {
       std::fprintf(stderr, "urtwin: lcm: %s\n", err);
@@ -423,6 +454,15 @@ int main(int argc, char** argv) {
   }
 
   urt_loop_start(loop);
+  std::unique_ptr<IoPlayer> io;
+  if (!o.io_file.empty()) {
+    io = std::make_unique<IoPlayer>(loop, io_events);
+    std::string ierr;
+    if (!io->start(&ierr)) {
+      std::fprintf(stderr, "urtwin: %s\n", ierr.c_str());
+      return 1;
+    }
+  }
   urt_emulator_start(emu);
   if (bridge) {
     urt_lcm_bridge_start(bridge);
@@ -474,6 +514,12 @@ int main(int argc, char** argv) {
   }
   if (bridge) {
     urt_lcm_bridge_stop(bridge);
+    print_lcm_stats(bridge);
+  }
+  if (io) {
+    io->stop();
+    std::fprintf(stderr, "urtwin: --io: %zu of %zu input changes played, %zu dropped\n",
+                 io->played(), io_events.size(), io->dropped());
   }
   urt_emulator_stop(emu);
   urt_loop_stop(loop);

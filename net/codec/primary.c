@@ -198,11 +198,11 @@ static void put_joint_data(urt_wbuf_t *w, const urt_snapshot_t *s) {
 }
 
 static void put_tool_data(urt_wbuf_t *w, const urt_snapshot_t *s) {
-  // no tool I/O is modelled: ranges and values as URSim 5.8 reports them
+  // tool analog inputs in voltage mode (range 1), at the levels set from outside (SET_INPUTS)
   urt_be_put_i8(w, 1);
   urt_be_put_i8(w, 1);
-  urt_be_put_f64(w, 0.0);
-  urt_be_put_f64(w, 0.0);
+  urt_be_put_f64(w, s->tool_analog_in[0]);
+  urt_be_put_f64(w, s->tool_analog_in[1]);
   urt_be_put_f32(w, 0.0f);  /* tool voltage 48 V */
   urt_be_put_u8(w, (uint8_t)s->tool_voltage);  /* tool output voltage (set_tool_voltage) */
   urt_be_put_f32(w, 0.0f);  /* tool current */
@@ -214,10 +214,10 @@ static void put_masterboard(urt_wbuf_t *w, layout_t l, int last_reserved,
                             const urt_snapshot_t *s) {
   urt_be_put_u32(w, s->digital_in);
   urt_be_put_u32(w, s->digital_out);
-  urt_be_put_u8(w, 1);  /* analog input ranges (URSim values) */
+  urt_be_put_u8(w, 1);  /* analog input ranges: voltage, as URSim's */
   urt_be_put_u8(w, 1);
-  urt_be_put_f64(w, 0.0);
-  urt_be_put_f64(w, 0.0);
+  urt_be_put_f64(w, s->analog_in[0]);
+  urt_be_put_f64(w, s->analog_in[1]);
   urt_be_put_i8(w, 0);  /* analog output domains */
   urt_be_put_i8(w, 0);
   urt_be_put_f64(w, s->analog_out[0]);

@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <lcm/lcm.h>
 #include <pthread.h>
+#include <stdbool.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,17 +25,18 @@ typedef struct counters {
   _Atomic uint64_t status_sent, status_repeated, ticks_lost, drive_sent, drive_lost,
       publish_errors;
   _Atomic uint64_t cmd_received, cmd_accepted, cmd_rejected, cmd_dropped, last_tick;
+  _Atomic uint64_t io_received, io_accepted, io_rejected, io_dropped;
 } counters_t;
 
 struct urt_lcm_bridge {
   urt_lcm_source_t src;
-  char *url, *status_channel, *drive_channel, *command_channel;
+  char *url, *status_channel, *drive_channel, *command_channel, *io_channel;
   double drive_rate;
   int lockstep;
 
   lcm_t *pub;                 /* publisher thread only (lcm_publish is thread-safe anyway) */
   lcm_t *sub;                 /* subscriber thread only; NULL without a command channel     */
-  lcm_subscription_t *subscription;
+  lcm_subscription_t *subscription, *io_subscription;
 
   pthread_t pub_thread, sub_thread;
   int pub_running, sub_running;
@@ -244,6 +246,24 @@ static void on_command(const lcm_recv_buf_t *rbuf, const char *channel, void *us
   }
 }
 
+// Input levels: one SET_INPUTS on the same ring as the commands; never grants a tick (the
+// inputs are the world's, not a step request).
+static void on_io(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
+  (void)channel;
+  urt_lcm_bridge_t *b = user;
+  urt_ctrl_cmd_t cmd;
+  bump(&b->n.io_received, 1);
+  if (urt_lcm_io_decode(rbuf->data, rbuf->data_size, &cmd) != 0) {
+    bump(&b->n.io_rejected, 1);
+    return;
+  }
+  if (!b->src.submit(b->src.ctx, &cmd)) {
+    bump(&b->n.io_dropped, 1);
+    return;
+  }
+  bump(&b->n.io_accepted, 1);
+}
+
 static void *sub_main(void *arg) {
   urt_lcm_bridge_t *b = arg;
   while (!atomic_load(&b->stop)) {
@@ -267,6 +287,9 @@ static void free_bridge(urt_lcm_bridge_t *b) {
     if (b->subscription != NULL) {
       lcm_unsubscribe(b->sub, b->subscription);
     }
+    if (b->io_subscription != NULL) {
+      lcm_unsubscribe(b->sub, b->io_subscription);
+    }
     lcm_destroy(b->sub);
   }
   if (b->pub != NULL) {
@@ -279,6 +302,7 @@ static void free_bridge(urt_lcm_bridge_t *b) {
   free(b->status_channel);
   free(b->drive_channel);
   free(b->command_channel);
+  free(b->io_channel);
   free(b);
 }
 
@@ -321,8 +345,9 @@ int urt_lcm_bridge_create_source(const urt_lcm_source_t *src, const urt_lcm_conf
   b->status_channel = dup_or(cfg->status_channel, URT_LCM_DEFAULT_STATUS);
   b->drive_channel = dup_or(cfg->drive_channel, URT_LCM_DEFAULT_DRIVE);
   b->command_channel = dup_or(cfg->command_channel, URT_LCM_DEFAULT_COMMAND);
+  b->io_channel = dup_or(cfg->io_channel, URT_LCM_DEFAULT_IO);
   if (b->url == NULL || b->status_channel == NULL || b->drive_channel == NULL ||
-      b->command_channel == NULL) {
+      b->command_channel == NULL || b->io_channel == NULL) {
     free_bridge(b);
     return URT_ENOMEM;
   }
@@ -330,7 +355,8 @@ int urt_lcm_bridge_create_source(const urt_lcm_source_t *src, const urt_lcm_conf
   // LCM refuses longer channel names at publish time: say so now
   if (strlen(b->status_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
       strlen(b->drive_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
-      strlen(b->command_channel) > LCM_MAX_CHANNEL_NAME_LENGTH) {
+      strlen(b->command_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
+      strlen(b->io_channel) > LCM_MAX_CHANNEL_NAME_LENGTH) {
     set_err(err, err_sz, "lcm: channel names are limited to %s characters", "63");
     free_bridge(b);
     return URT_EINVAL;
@@ -345,12 +371,18 @@ int urt_lcm_bridge_create_source(const urt_lcm_source_t *src, const urt_lcm_conf
     free_bridge(b);
     return URT_EIO;
   }
-  if (b->command_channel[0] != '\0') {
+  if (b->command_channel[0] != '\0' || b->io_channel[0] != '\0') {
     b->sub = lcm_create(b->url);
-    if (b->sub != NULL) {
+    bool ok = b->sub != NULL;
+    if (ok && b->command_channel[0] != '\0') {
       b->subscription = lcm_subscribe(b->sub, b->command_channel, on_command, b);
+      ok = b->subscription != NULL;
     }
-    if (b->sub == NULL || b->subscription == NULL) {
+    if (ok && b->io_channel[0] != '\0') {
+      b->io_subscription = lcm_subscribe(b->sub, b->io_channel, on_io, b);
+      ok = b->io_subscription != NULL;
+    }
+    if (!ok) {
       set_err(err, err_sz, "lcm: cannot subscribe on %s", b->url);
       free_bridge(b);
       return URT_EIO;
@@ -427,5 +459,9 @@ void urt_lcm_bridge_get_stats(const urt_lcm_bridge_t *b, urt_lcm_stats_t *out) {
   out->cmd_accepted = atomic_load(&n->cmd_accepted);
   out->cmd_rejected = atomic_load(&n->cmd_rejected);
   out->cmd_dropped = atomic_load(&n->cmd_dropped);
+  out->io_received = atomic_load(&n->io_received);
+  out->io_accepted = atomic_load(&n->io_accepted);
+  out->io_rejected = atomic_load(&n->io_rejected);
+  out->io_dropped = atomic_load(&n->io_dropped);
   out->last_tick = atomic_load(&n->last_tick);
 }

@@ -165,3 +165,35 @@ int urt_lcm_command_decode(const void *buf, size_t len, uint64_t id, urt_ctrl_cm
   urtwin_lcmt_urtwin_command_decode_cleanup(&msg);
   return rc;
 }
+
+int urt_lcm_io_decode(const void *buf, size_t len, urt_ctrl_cmd_t *out) {
+  if (len > (size_t)INT32_MAX) {
+    return URT_EPROTO;
+  }
+  urtwin_lcmt_urtwin_io msg;
+  memset(&msg, 0, sizeof msg);
+  if (urtwin_lcmt_urtwin_io_decode(buf, 0, (int)len, &msg) != (int)len) {
+    return URT_EPROTO;  // wrong fingerprint, truncated or trailing bytes
+  }
+  uint32_t dmask = (uint32_t)msg.digital_mask, levels = (uint32_t)msg.digital_levels;
+  uint32_t amask = (uint32_t)(uint8_t)msg.analog_mask;
+  if (msg.digital_mask < 0 || dmask >= (1u << 18) || (levels & ~dmask) != 0 || amask >= 16u) {
+    return URT_ERANGE;
+  }
+  urt_ctrl_cmd_t c;
+  memset(&c, 0, sizeof c);
+  c.kind = URT_CTRL_SET_INPUTS;
+  c.index = (int32_t)dmask;
+  c.value = (double)levels;
+  c.a = (double)amask;
+  for (int k = 0; k < 4; k++) {
+    if (amask & (1u << k)) {
+      if (!(msg.analog[k] >= 0.0 && msg.analog[k] <= 10.0)) {  // NaN fails too
+        return URT_ERANGE;
+      }
+      c.q[k] = msg.analog[k];
+    }
+  }
+  *out = c;
+  return 0;
+}

@@ -59,6 +59,22 @@ static int b_get_digital_in(vm *V, const us_node *n, sv *a, sv *out) { return ge
 static int b_get_configurable_digital_in(vm *V, const us_node *n, sv *a, sv *out) { return get_bit(V, n, a, out, true, 8, 8); }
 static int b_get_tool_digital_in(vm *V, const us_node *n, sv *a, sv *out) { return get_bit(V, n, a, out, true, 16, 2); }
 
+/* get_*_analog_in(n) [V]: inputs 0–1 of the control box, then 0–1 of the tool (get_analog_in's
+ * 2–3), as the last snapshot shows them */
+static int get_analog(vm *V, const us_node *n, sv *a, sv *out, int first, int count) {
+  int64_t k;
+  if (urt__us_arg_int(V, n, a, 0, &k) != X_OK) return X_ERR;
+  if (k < 0 || k >= count) return urt__us_fail(V, n, "Index out of bounds: analog input %lld", (long long)k);
+  const urt_snapshot_t *s = urt__us_snap(V);
+  int i = first + (int)k;
+  *out = mk_float(i < 2 ? s->analog_in[i] : s->tool_analog_in[i - 2]);
+  return X_OK;
+}
+
+static int b_get_standard_analog_in(vm *V, const us_node *n, sv *a, sv *out) { return get_analog(V, n, a, out, 0, 2); }
+static int b_get_tool_analog_in(vm *V, const us_node *n, sv *a, sv *out) { return get_analog(V, n, a, out, 2, 2); }
+static int b_get_analog_in(vm *V, const us_node *n, sv *a, sv *out) { return get_analog(V, n, a, out, 0, 4); }
+
 //---- RTDE registers (protocols.md §2.5–2.6) ----
 
 /* the register number argument 0, checked against the bank's size */
@@ -137,6 +153,9 @@ const us_builtin urt__us_builtins_io[] = {
     {"get_digital_in", b_get_digital_in, 1, P("n")},
     {"get_configurable_digital_in", b_get_configurable_digital_in, 1, P("n")},
     {"get_tool_digital_in", b_get_tool_digital_in, 1, P("n")},
+    {"get_standard_analog_in", b_get_standard_analog_in, 1, P("n")},
+    {"get_tool_analog_in", b_get_tool_analog_in, 1, P("n")},
+    {"get_analog_in", b_get_analog_in, 1, P("n")},
     // RTDE registers
     {"write_output_integer_register", b_write_output_integer_register, 2, P("address", "value")},
     {"write_output_float_register", b_write_output_float_register, 2, P("address", "value")},

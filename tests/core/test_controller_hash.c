@@ -120,7 +120,12 @@ static void fold(const rig_t *r) {
   const size_t head = offsetof(urt_ctrl_t, active) + sizeof r->c->active;
   const size_t tail = offsetof(urt_ctrl_t, q0);
   g_hash = fnv(g_hash, c, head);
-  g_hash = fnv(g_hash, c + tail, sizeof *r->c - tail);
+  // the inputs (digital_in onwards, last in the struct) came after the rows were recorded;
+  // then the struct ended at the next multiple of 8, in zeroed padding
+  const size_t end = offsetof(urt_ctrl_t, digital_in);
+  static const unsigned char zeros[8];
+  g_hash = fnv(g_hash, c + tail, end - tail);
+  g_hash = fnv(g_hash, zeros, (8 - end % 8) % 8);
   // the command's tail padding is whatever the caller's stack held (urt_command_set copies it)
   urt_data_t d = *r->d;
   const size_t pad = offsetof(urt_command_t, torque_mask) + sizeof d.cmd.torque_mask;

@@ -137,9 +137,15 @@ typedef enum urt_ctrl_cmd_kind {
                                  acceleration and speed (qdd_max, qd_max; the planner keeps
                                  its margins 0.9, 0.98); r as movej. A motion: done on arrival */
   /* added by the replay (urt_sim --replay) */
-  URT_CTRL_SETPOINT           /* q[6], qd[6], pose[0..5] = q̈[6], tau[6]: a complete joint
+  URT_CTRL_SETPOINT,          /* q[6], qd[6], pose[0..5] = q̈[6], tau[6]: a complete joint
                                  set-point at the end of the period, as a recorded controller's
                                  target_q/qd/qdd; otherwise as DIRECT (done in its period) */
+  /* added by the hardening issue: what the world wires to the control box's inputs */
+  URT_CTRL_SET_INPUTS         /* index = mask of the digital inputs to change (bits 0–7
+                                 standard, 8–15 configurable, 16–17 tool), value = their new
+                                 levels (the same bits, an integer); a = mask of the analog
+                                 inputs to change (bit 0–1 standard 0–1, bit 2–3 tool 0–1),
+                                 q[0..3] = their values [V], in [0, 10]                     */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
@@ -221,6 +227,12 @@ typedef struct urt_ctrl {
   int32_t force_mode;         /* 1 while force mode is on                                 */
   urt_ctrl_cmd_t force;       /* its parameters: the last FORCE_MODE                      */
   int32_t tool_voltage;       /* the tool connector's supply (SET_TOOL_VOLTAGE)  [V]      */
+
+  /* added by the hardening issue: the inputs (SET_INPUTS), first of the fields the recorded
+   * controller hashes leave out (tests/core/test_controller_hash.c) */
+  uint32_t digital_in;        /* bits 0–7 standard, 8–15 configurable, 16–17 tool */
+  double analog_in[2];        /* standard analog inputs [V]                       */
+  double tool_analog_in[2];   /* tool analog inputs [V]                           */
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or

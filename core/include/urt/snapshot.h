@@ -57,6 +57,7 @@ typedef struct urt_snapshot {
   /* I/O */
   uint32_t digital_in, digital_out; /* bits 0–7 standard, 8–15 configurable, 16–17 tool */
   double analog_out[2];
+  double analog_in[2], tool_analog_in[2];  /* inputs in voltage mode (SET_INPUTS)  [V]      */
 
   /* modes */
   int32_t robot_mode, safety_mode, safety_status, program_state, control_mode;

@@ -34,6 +34,7 @@ extern "C" {
 #define URT_LCM_DEFAULT_STATUS "URTWIN_STATUS"
 #define URT_LCM_DEFAULT_DRIVE "URTWIN_DRIVE"
 #define URT_LCM_DEFAULT_COMMAND "URTWIN_COMMAND"
+#define URT_LCM_DEFAULT_IO "URTWIN_IO"
 
 typedef struct urt_lcm_config {
   const char *url;             /* LCM provider URL; NULL: URT_LCM_DEFAULT_URL                   */
@@ -41,6 +42,9 @@ typedef struct urt_lcm_config {
   const char *drive_channel;   /* NULL: URT_LCM_DEFAULT_DRIVE; "": publish no drive messages    */
   const char *command_channel; /* NULL: URT_LCM_DEFAULT_COMMAND; "": no subscriber thread.
                                 * LCM treats it as a regular expression (anchored).             */
+  const char *io_channel;      /* NULL: URT_LCM_DEFAULT_IO; "": do not listen for input levels
+                                * (lcmt_urtwin_io → URT_CTRL_SET_INPUTS, on the subscriber
+                                * thread; never grants a tick)                                   */
   double drive_rate;           /* drive messages per second at most [Hz], by sample time;
                                 * 0: every sample the loop makes (its own drive_rate)           */
   int lockstep;                /* 1 (loop in URT_PACING_LOCKSTEP): grant one tick at start, so a
@@ -66,6 +70,7 @@ typedef struct urt_lcm_stats {
   uint64_t cmd_rejected;    /* malformed (URT_EPROTO) or not finite (URT_ERANGE)             */
   uint64_t cmd_dropped;     /* valid but the command ring was full                           */
   uint64_t last_tick;       /* tick of the last status published                             */
+  uint64_t io_received, io_accepted, io_rejected, io_dropped;  /* the same, I/O channel   */
 } urt_lcm_stats_t;
 
 /* Where the bridge reads ticks and drive samples and sends commands: the loop (urt_lcm_bridge_

@@ -21,6 +21,7 @@
 #include "urt/snapshot.h"
 #include "urtwin_lcmt_urtwin_command.h"
 #include "urtwin_lcmt_urtwin_drive.h"
+#include "urtwin_lcmt_urtwin_io.h"
 #include "urtwin_lcmt_urtwin_status.h"
 
 #ifdef __cplusplus
@@ -52,6 +53,13 @@ int urt_lcm_command_to_ctrl(const urtwin_lcmt_urtwin_command *msg, uint64_t id,
  * wrong fingerprint, truncated, trailing bytes, bad counts) or URT_ERANGE (NaN or infinite).
  * On failure *out is untouched. Context: non-RT (the generated decoder allocates the arrays). */
 int urt_lcm_command_decode(const void *buf, size_t len, uint64_t id, urt_ctrl_cmd_t *out);
+
+/* Decode an encoded lcmt_urtwin_io (as received on the I/O channel) into a URT_CTRL_SET_INPUTS
+ * command. Returns 0, URT_EPROTO (not a well-formed lcmt_urtwin_io) or URT_ERANGE (a mask
+ * outside the 18 digital pins or 4 analog inputs, levels outside the mask, an analog value
+ * named by the mask not finite or outside [0, 10] V). On failure *out is untouched.
+ * Context: any; no allocation (the type has no variable-length arrays). */
+int urt_lcm_io_decode(const void *buf, size_t len, urt_ctrl_cmd_t *out);
 
 #ifdef __cplusplus
 }
