@@ -261,6 +261,57 @@ static void test_set_tool_voltage__kept_shown_and_bad_values_refused(void **stat
   rig_free(&r);
 }
 
+// SET_INPUTS changes only the inputs its masks name; a command a control box could not see
+// (levels outside the mask, a pin past 17, a voltage outside 0–10 V, a NaN) changes nothing
+static void test_set_inputs__masked_levels_shown_and_bad_commands_refused_whole(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  urt_ctrl_cmd_t in = cmd_of(&r, URT_CTRL_SET_INPUTS);
+  in.id = 0;
+  in.index = (1 << 0) | (1 << 9) | (1 << 17);
+  in.value = (1 << 0) | (1 << 17);
+  in.a = 0x1 | 0x8;
+  in.q[0] = 4.5;
+  in.q[3] = 10.0;
+  rig_period(&r, &in);
+  urt_snapshot_t s = snap(&r);
+  assert_int_equal(s.digital_in, (1u << 0) | (1u << 17));
+  assert_true(s.analog_in[0] == 4.5 && s.analog_in[1] == 0.0);
+  assert_true(s.tool_analog_in[0] == 0.0 && s.tool_analog_in[1] == 10.0);
+  assert_false(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
+
+  // a second change leaves what it does not name
+  urt_ctrl_cmd_t more = in;
+  more.index = 1 << 17;
+  more.value = 0;
+  more.a = 0x2;
+  more.q[1] = 0.25;
+  rig_period(&r, &more);
+  s = snap(&r);
+  assert_int_equal(s.digital_in, 1u << 0);
+  assert_true(s.analog_in[0] == 4.5 && s.analog_in[1] == 0.25 && s.tool_analog_in[1] == 10.0);
+
+  const struct {
+    int32_t mask;
+    double levels, amask, v;
+  } bad[] = {{1, 3, 0, 0}, {1 << 18, 0, 0, 0}, {-1, 0, 0, 0}, {0, 0, 16, 0},
+             {0, 0, 0.5, 0}, {0, 0, 1, 10.5}, {0, 0, 1, -0.1}, {0, 0, 1, NAN}, {1, 0.5, 0, 0}};
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+    urt_ctrl_cmd_t b = in;
+    b.index = bad[k].mask;
+    b.value = bad[k].levels;
+    b.a = bad[k].amask;
+    b.q[0] = bad[k].v;
+    r.c->fault = 0;
+    rig_period(&r, &b);
+    assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
+    s = snap(&r);
+    assert_int_equal(s.digital_in, 1u << 0);
+    assert_true(s.analog_in[0] == 4.5);
+  }
+  rig_free(&r);
+}
+
 //---- direct torque ----
 
 /* stream directTorque with the model's gravity at the measured position for t seconds; returns
@@ -694,6 +745,7 @@ int main(void) {
       cmocka_unit_test(test_pause__streaming_stops_and_program_stop_clears_the_pause),
       cmocka_unit_test(test_set_wrench__shows_in_tcp_force_and_bad_values_are_refused),
       cmocka_unit_test(test_set_tool_voltage__kept_shown_and_bad_values_refused),
+      cmocka_unit_test(test_set_inputs__masked_levels_shown_and_bad_commands_refused_whole),
       cmocka_unit_test(test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it),
       cmocka_unit_test(test_freedrive__holds_without_a_wrench_and_gives_way_to_one),
       cmocka_unit_test(test_freedrive__held_axes_resist_free_axis_gives_way),
