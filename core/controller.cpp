@@ -424,6 +424,13 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       }
       break;
     }
+    case URT_CTRL_ZERO_FTSENSOR:
+      if (!all_finite(cmd->pose, 6)) {
+        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
+      } else {
+        std::memcpy(c->ft_bias, cmd->pose, sizeof c->ft_bias);
+      }
+      break;
     case URT_CTRL_SET_TOOL_VOLTAGE:
       // set_tool_voltage: the three supplies a UR tool connector has
       if (cmd->value != 0.0 && cmd->value != 12.0 && cmd->value != 24.0) {

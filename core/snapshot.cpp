@@ -11,7 +11,8 @@
 // - tau: the gear output torque T_CS; i_control: the PI cascade's current reference.
 // - tcp_force: the wrench at the active TCP from the joint-torque residual,
 //   Jᵀ w = M q̈ + C q̇ + g − (T_CS − T_f), solved with damping near singular poses; it is the
-//   wrench the environment applies (same sign as d->wrench_ext).
+//   wrench the environment applies (same sign as d->wrench_ext); tcp_force_raw is that estimate,
+//   tcp_force the estimate less what zero_ftsensor zeroed (c->ft_bias), as a UR's reading.
 // - elbow: the origin of DH frame 2, on the elbow joint's axis (joint 3 turns about z₂).
 // - tcp_pose, tcp_speed: forward kinematics of the measured q, qd (what a controller knows).
 // - tool_accel: specific force (acceleration minus gravity) of the TCP point, tool frame.
@@ -150,7 +151,10 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
     }
     double w = std::fabs(J.determinant());
     double lambda = w >= 1e-3 ? 0.0 : 0.05 * std::sqrt(1.0 - (w / 1e-3) * (w / 1e-3));
-    Eigen::Map<Vec6>{s->tcp_force} = dls_solve(J.transpose(), r, lambda);
+    Eigen::Map<Vec6>{s->tcp_force_raw} = dls_solve(J.transpose(), r, lambda);
+    for (int k = 0; k < 6; k++) {
+      s->tcp_force[k] = s->tcp_force_raw[k] - c->ft_bias[k];
+    }
   }
   std::memcpy(s->tcp_offset, c->tcp_offset, sizeof s->tcp_offset);
 

@@ -18,7 +18,7 @@ int urt__us_service_tick(us_service *sv, const us_hooks *h, us_err *err) {
   urt_snapshot_t s;
   host->snapshot(host->ctx, &s);
   uint64_t k = sv->n++ % US_HIST;
-  for (int j = 0; j < 6; j++) sv->f[k][j] = s.tcp_force[j] - sv->ft_bias[j];
+  memcpy(sv->f[k], s.tcp_force, sizeof sv->f[k]);  // already less zero_ftsensor's offset
 
   // rtde_set_watchdog(…, "stop"): a refresh within 1 / f (one tick of slack)
   if (sv->wd_on && host->read_registers) {
@@ -67,9 +67,12 @@ static int b_tool_contact(vm *V, const us_node *n, sv *a, sv *out) {
   return X_OK;
 }
 
+/* zero_ftsensor(): the controller subtracts the wrench it reads now from every later reading
+ * (get_tcp_force, RTDE actual_TCP_force, 30003, tool_contact) */
 static int b_zero_ftsensor(vm *V, const us_node *n, sv *a, sv *out) {
-  memcpy(urt__us_service(V)->ft_bias, urt__us_snap(V)->tcp_force, 6 * sizeof(double));
-  return X_OK;
+  urt_ctrl_cmd_t c = {.kind = URT_CTRL_ZERO_FTSENSOR};
+  memcpy(c.pose, urt__us_snap(V)->tcp_force_raw, sizeof c.pose);
+  return urt__us_submit(V, n, &c);
 }
 
 /* rtde_set_watchdog(variable_name, min_frequency, action="pause"): "stop" stops the program when

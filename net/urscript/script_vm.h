@@ -163,7 +163,6 @@ us_force_state *urt__us_force_state(vm *V);
 typedef struct us_service {
   uint64_t n;                      /* ticks recorded */
   double f[US_HIST][6];            /* TCP force per tick (tool_contact) */
-  double ft_bias[6];               /* zero_ftsensor */
   bool wd_on, wd_double;           /* rtde_set_watchdog */
   int wd_reg;
   double wd_period, wd_last;

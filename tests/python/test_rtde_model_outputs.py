@@ -17,7 +17,7 @@ import pytest
 import built
 
 from rtde_client import RecipeError, RtdeClient
-from urtwin_proc import URTWIN, Emulator
+from urtwin_proc import URTWIN, Emulator, RtReader
 
 built.require(URTWIN)
 
@@ -81,3 +81,31 @@ def test_outputs_without_a_model_are_not_found(name):
             c.setup_outputs(["timestamp", name], frequency=500)
     assert "NOT_FOUND" in e.value.types
     assert e.value.types[0] == "DOUBLE"
+
+
+def test_zero_ftsensor_zeroes_the_tcp_force_reading_as_on_the_robot():
+    """A 20 N push along base z (RTDE external_force_torque, what the virtual world applies)
+    reads as about 20 N in actual_TCP_force; after zero_ftsensor() the same push reads 0, and
+    when the push ends the reading is -20 N (the offset stays, as on a UR), the same on 30003."""
+    names = ["timestamp", "actual_TCP_force"]
+    with Emulator("--set", "sensors.noise=false", version=VERSION) as emu:
+        with RtdeClient(emu.host) as c:
+            c.negotiate_protocol_version(2)
+            push = c.setup_inputs(["external_force_torque"])
+            c.send_inputs(push, {"external_force_torque": [0.0, 0.0, 20.0, 0.0, 0.0, 0.0]})
+            time.sleep(1.0)  # the arm settles against the push
+            pushed = packages(emu.host, names, 5)[-1]["actual_TCP_force"]
+            emu.send_script("def z():\n  zero_ftsensor()\nend")
+            time.sleep(0.5)
+            zeroed = packages(emu.host, names, 5)[-1]["actual_TCP_force"]
+            c.send_inputs(push, {"external_force_torque": [0.0] * 6})
+            time.sleep(1.0)
+            released = packages(emu.host, names, 5)[-1]["actual_TCP_force"]
+            with RtReader(emu.host) as rt:
+                rt_released = rt.read_decoded()["tcp_force"]
+    print(f"\nzero_ftsensor: pushed Fz {pushed[2]:.2f} N, zeroed {zeroed[2]:.3f} N, "
+          f"released {released[2]:.2f} N (30003 {rt_released[2]:.2f} N)")
+    assert abs(pushed[2] - 20.0) < 1.0
+    assert all(abs(f) < 0.05 for f in zeroed)
+    assert abs(released[2] + pushed[2]) < 0.1
+    assert max(abs(a - b) for a, b in zip(released, rt_released)) < 0.05

@@ -141,11 +141,13 @@ typedef enum urt_ctrl_cmd_kind {
                                  set-point at the end of the period, as a recorded controller's
                                  target_q/qd/qdd; otherwise as DIRECT (done in its period) */
   /* added by the hardening issue: what the world wires to the control box's inputs */
-  URT_CTRL_SET_INPUTS         /* index = mask of the digital inputs to change (bits 0–7
+  URT_CTRL_SET_INPUTS,        /* index = mask of the digital inputs to change (bits 0–7
                                  standard, 8–15 configurable, 16–17 tool), value = their new
                                  levels (the same bits, an integer); a = mask of the analog
                                  inputs to change (bit 0–1 standard 0–1, bit 2–3 tool 0–1),
                                  q[0..3] = their values [V], in [0, 10]                     */
+  URT_CTRL_ZERO_FTSENSOR      /* pose[6] = the raw TCP wrench (snapshot tcp_force_raw) that
+                                 reads zero from now on: zero_ftsensor()                     */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
@@ -233,6 +235,7 @@ typedef struct urt_ctrl {
   uint32_t digital_in;        /* bits 0–7 standard, 8–15 configurable, 16–17 tool */
   double analog_in[2];        /* standard analog inputs [V]                       */
   double tool_analog_in[2];   /* tool analog inputs [V]                           */
+  double ft_bias[6];          /* subtracted from the TCP wrench (ZERO_FTSENSOR) [N, N m] */
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or

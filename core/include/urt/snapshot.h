@@ -42,7 +42,9 @@ typedef struct urt_snapshot {
   /* tool */
   double tcp_pose[6], tcp_speed[6];               /* actual                       */
   double tcp_pose_target[6], tcp_speed_target[6];
-  double tcp_force[6];        /* wrench at the TCP estimated from the joint-torque residual [N, N m] */
+  double tcp_force[6];        /* wrench at the TCP estimated from the joint-torque residual,
+                               * less what zero_ftsensor zeroed (ctrl ft_bias)     [N, N m] */
+  double tcp_force_raw[6];    /* the same before that offset                       [N, N m] */
   double tcp_offset[6];       /* active TCP offset from the flange                         */
   double tool_accel[3];       /* tool accelerometer, tool frame             [m/s²]    */
   double elbow_pos[3], elbow_vel[3];  /* elbow joint: origin of DH frame 2 (on the axis of
