@@ -171,7 +171,8 @@ plots: build
 	$(PY) tools/plot_run.py build/excitation.csv --out build/plots
 
 run: build
-	build/tools/urtwin --config config/ur5.yaml --bind 127.0.0.1
+	mkdir -p build/controller_log
+	build/tools/urtwin --config config/ur5.yaml --bind 127.0.0.1 --log-dir build/controller_log
 
 clean:
 	rm -rf build build-asan build-tsan

@@ -66,6 +66,7 @@ struct Options {
   std::string external_control_host = "127.0.0.1:50002";  // the URCap's host IP and port
   double stats_every = 10.0;    // seconds between loop statistics lines (0: never)
   std::string io_file;          // --io: a timed script of input levels (tools/io_script.h)
+  std::string log_dir;          // --log-dir: where saveLog & co. write the controller's log
   std::vector<std::string> script_allow_hosts;
   int max_clients = URT_EMULATOR_MAX_CLIENTS;
   double out_budget_mib = URT_EMULATOR_OUT_BUDGET / 1048576.0;
@@ -272,6 +273,10 @@ int main(int argc, char** argv) {
                                                      : std::string("expected IPv4:PORT");
       })
       ->capture_default_str();
+  app.add_option("--log-dir", o.log_dir,
+                 "an existing folder where the dashboard's saveLog, generate flight report and "
+                 "generate support file write the controller's log (without it they are refused)")
+      ->check(CLI::ExistingDirectory);
   app.add_option("--io", o.io_file,
                  "a YAML script of timed input levels (digital and analog inputs) played in "
                  "controller time: tools/io_script.h");
@@ -387,6 +392,7 @@ int main(int argc, char** argv) {
   ec.port_offset = o.port_offset;
   ec.version = version;
   ec.programs_dir = o.programs_dir.c_str();
+  ec.log_dir = o.log_dir.empty() ? nullptr : o.log_dir.c_str();
   ec.local_control = o.local_control;
   ec.remote_control_off = o.no_remote_control;
   ec.serial_number = o.serial_number.c_str();

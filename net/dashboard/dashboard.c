@@ -11,6 +11,7 @@
 
 #include <errno.h>
 #include <limits.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -597,22 +598,47 @@ static void cmd_get_robot_model(const call_t *c) {
   put_n(c->w, c->ctx->robot_model, strnlen(c->ctx->robot_model, sizeof c->ctx->robot_model));
 }
 
+// The owner writes the log (ctx->write_log); out is the id, the file, or why not.
+static int write_log(const call_t *c, int what, char *out, size_t out_sz) {
+  if (!c->ctx->write_log) {
+    snprintf(out, out_sz, "this controller keeps no log folder");
+    return -1;
+  }
+  out[0] = '\0';
+  return c->ctx->write_log(c->ctx->write_log_user, what, c->arg, c->arg_len, out, out_sz);
+}
+
 static void cmd_generate_flight_report(const call_t *c) {
-  // no report is written; the id counts requests (text as URCL expects it)
-  c->st->report_count++;
-  put(c->w, "Flight Report generated with id: ");
-  put_u64(c->w, c->st->report_count);
+  // the success text as URCL matches it; the failure's wording is urtwin's (undocumented)
+  char out[1024];
+  if (write_log(c, URT_DASHBOARD_LOG_FLIGHT_REPORT, out, sizeof out) == 0) {
+    c->st->report_count++;
+    put(c->w, "Flight Report generated with id: ");
+  } else {
+    put(c->w, "Flight Report could not be generated: ");
+  }
+  put(c->w, out);
 }
 
 static void cmd_generate_support_file(const call_t *c) {
-  // no file is written (unconfirmed wording after the colon)
-  put(c->w, "Completed successfully: ");
-  put_n(c->w, c->arg, c->arg_len);
-  put(c->w, c->arg_len && c->arg[c->arg_len - 1] == '/' ? "" : "/");
-  put(c->w, "ur_support_file.zip");
+  // written into the log folder, whatever folder the client names (unconfirmed wording after
+  // the colon): the reply says where
+  char out[1024];
+  put(c->w, write_log(c, URT_DASHBOARD_LOG_SUPPORT_FILE, out, sizeof out) == 0
+                ? "Completed successfully: "
+                : "Support file could not be generated: ");
+  put(c->w, out);
 }
 
-static void cmd_save_log(const call_t *c) { put(c->w, "Log saved to disk"); }
+static void cmd_save_log(const call_t *c) {
+  char out[1024];
+  if (write_log(c, URT_DASHBOARD_LOG_SAVE, out, sizeof out) == 0) {
+    put(c->w, "Log saved to disk");
+  } else {
+    put(c->w, "Could not save log: ");
+    put(c->w, out);
+  }
+}
 
 //---- the command table ----
 

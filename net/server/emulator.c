@@ -375,6 +375,10 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   if (!e) {
     return URT_ENOMEM;
   }
+  if (urt_ctrl_log_init(&e->log) != 0) {
+    free(e);
+    return URT_ENOMEM;
+  }
   e->loop = loop;
   e->m = urt_loop_model(loop);
   e->cfg = *cfg;
@@ -409,6 +413,12 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   e->dash_ctx.program_exts = ".urp,.script";
   e->dash_ctx.prepare_program = urt__program_prepare;  // `load` compiles a .urp
   e->dash_ctx.prepare_user = e;
+  e->dash_ctx.write_log = urt__dashboard_write_log;
+  e->dash_ctx.write_log_user = e;
+  if (cfg->log_dir) {
+    snprintf(e->log_dir, sizeof e->log_dir, "%s", cfg->log_dir);
+    e->cfg.log_dir = e->log_dir;
+  }
   pthread_mutex_init(&e->fetch_lock, NULL);
   snprintf(e->ec_host, sizeof e->ec_host, "%s",
            cfg->external_control_host ? cfg->external_control_host : "127.0.0.1");
@@ -523,6 +533,7 @@ void urt_emulator_destroy(urt_emulator_t *e) {
   pthread_mutex_destroy(&e->msg_lock);
   pthread_mutex_destroy(&e->reg_lock);
   pthread_mutex_destroy(&e->fetch_lock);
+  urt_ctrl_log_free(&e->log);
   free(e);
 }
 

@@ -12,6 +12,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "ctrl_log.h"
 #include "urt/net/dashboard.h"
 #include "urt/net/emulator.h"
 #include "urt/net/primary.h"
@@ -91,6 +92,8 @@ struct urt_emulator {
   /* 29999 */
   urt_dashboard_ctx_t dash_ctx;
   urt_dashboard_state_t dash;
+  urt_ctrl_log_t log;            /* the controller's log (ctrl_log.h)                 */
+  char log_dir[1024];            /* where saveLog & co. write it; "" : nowhere         */
   double pstop_since;            /* controller time the protective stop began, < 0: none */
 
   /* the loaded program (program_play.c): a compiled .urp, or NULL for a URScript file; and
@@ -143,7 +146,12 @@ void urt__dashboard_tick(urt_emulator_t *e, const urt_snapshot_t *s);
 /* Safety-mode change messages, before this tick's state (port_script.c). */
 void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s);
 
-/* Robot messages to every primary client (30001, 30011). */
+/* The dashboard's saveLog, generate flight report and generate support file
+ * (urt_dashboard_ctx_t.write_log; port_dashboard.c). */
+int urt__dashboard_write_log(void *user, int what, const char *arg, size_t arg_len, char *out,
+                             size_t out_sz);
+
+/* Robot messages to every primary client (30001, 30011); each also goes into the log. */
 void urt__script_broadcast(urt_emulator_t *e, const urt_script_msg_t *msg);
 void urt__script_broadcast_text(urt_emulator_t *e, const char *text);
 

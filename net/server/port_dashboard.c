@@ -94,6 +94,46 @@ static void dashboard_close(urt_emulator_t *e, urt__client_t *c) {
   c->proto = NULL;
 }
 
+// saveLog & co.: the controller's log into the log folder (ctrl_log.h), with a header of who
+// and what the robot is for the reports
+int urt__dashboard_write_log(void *user, int what, const char *arg, size_t arg_len, char *out,
+                             size_t out_sz) {
+  (void)arg;
+  (void)arg_len;
+  urt_emulator_t *e = user;
+  if (e->log_dir[0] == '\0') {
+    snprintf(out, out_sz, "no log folder (start urtwin with --log-dir DIR)");
+    return -1;
+  }
+  urt_snapshot_t s;
+  urt_loop_read_latest(e->loop, &s);
+  char header[512];
+  snprintf(header, sizeof header,
+           "urtwin flight report\nrobot: %s, serial number %s\ncontroller: %d.%d.%d\n"
+           "controller time: %.3f s\nrobot mode %d, safety mode %d, program state %d\n"
+           "joint positions [rad]: %.6f %.6f %.6f %.6f %.6f %.6f\n--- log ---\n",
+           e->dash_ctx.robot_model, e->dash_ctx.serial_number, e->cfg.version.major,
+           e->cfg.version.minor, e->cfg.version.bugfix, s.time, s.robot_mode, s.safety_mode,
+           urt__program_state(e, s.program_state), s.q[0], s.q[1], s.q[2], s.q[3], s.q[4],
+           s.q[5]);
+  uint64_t id = 0;
+  switch (what) {
+    case URT_DASHBOARD_LOG_SAVE:
+      return urt_ctrl_log_save(&e->log, e->log_dir, out, out_sz);
+    case URT_DASHBOARD_LOG_FLIGHT_REPORT:
+      if (urt_ctrl_log_flight_report(&e->log, e->log_dir, header, &id, out, out_sz) != 0) {
+        return -1;
+      }
+      snprintf(out, out_sz, "%llu", (unsigned long long)id);
+      return 0;
+    case URT_DASHBOARD_LOG_SUPPORT_FILE:
+      return urt_ctrl_log_support_file(&e->log, e->log_dir, header, out, out_sz);
+    default:
+      snprintf(out, out_sz, "unknown log request");
+      return -1;
+  }
+}
+
 const urt__port_ops_t urt__port_dashboard_ops = {.open = dashboard_open, .input = dashboard_input,
                                                  .close = dashboard_close};
 

@@ -45,6 +45,28 @@ void urt__script_broadcast(urt_emulator_t *e, const urt_script_msg_t *msg) {
     default:
       break;
   }
+  char line[URT_CTRL_LOG_LINE];
+  switch (msg->kind) {
+    case URT_SCRIPT_MSG_TEXT:
+      urt_ctrl_log_add(&e->log, msg->time, "INFO", msg->text);
+      break;
+    case URT_SCRIPT_MSG_KEY:
+      snprintf(line, sizeof line, "%.63s: %.250s", msg->title, msg->text);
+      urt_ctrl_log_add(&e->log, msg->time, "INFO", line);
+      break;
+    case URT_SCRIPT_MSG_POPUP:
+      snprintf(line, sizeof line, "popup %.63s: %.240s", msg->title, msg->text);
+      urt_ctrl_log_add(&e->log, msg->time, msg->error ? "ERROR" : msg->warning ? "WARN" : "INFO",
+                       line);
+      break;
+    case URT_SCRIPT_MSG_RUNTIME_EXCEPTION:
+      snprintf(line, sizeof line, "runtime exception at %u:%u: %.250s", msg->line, msg->column,
+               msg->text);
+      urt_ctrl_log_add(&e->log, msg->time, "ERROR", line);
+      break;
+    default:
+      break;
+  }
   if (n > 0) {
     urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
   }
@@ -87,7 +109,15 @@ void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
   if (n > 0) {
     urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
   }
+  static const char *const kMode[] = {"?", "NORMAL", "REDUCED", "PROTECTIVE_STOP", "RECOVERY",
+                                      "SAFEGUARD_STOP", "SYSTEM_EMERGENCY_STOP",
+                                      "ROBOT_EMERGENCY_STOP", "VIOLATION", "FAULT"};
+  char line[96];
+  snprintf(line, sizeof line, "safety mode %s",
+           mode >= 1 && mode <= 9 ? kMode[mode] : "(unknown)");
+  urt_ctrl_log_add(&e->log, s->time, mode == URT_SAFETY_MODE_NORMAL ? "INFO" : "WARN", line);
   if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP && (s->ctrl_fault & URT_CTRL_FAULT_SCRIPT_PSTOP)) {
+    urt_ctrl_log_add(&e->log, s->time, "WARN", "C209A0: A protective stop was triggered");
     n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 209, 0,
                                       URT_PRIMARY_REPORT_WARNING, 0, 0,
                                       "A protective stop was triggered", buf, sizeof buf);
@@ -96,6 +126,8 @@ void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
     }
   }
   if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP && (s->ctrl_fault & URT_CTRL_FAULT_JUMP)) {
+    urt_ctrl_log_add(&e->log, s->time, "ERROR",
+                     "C204A0: Protective Stop: Invalid setpoints: Position jump");
     n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 204, 0,
                                       URT_PRIMARY_REPORT_VIOLATION, 0, 0,
                                       "Protective Stop: Invalid setpoints: Position jump", buf,

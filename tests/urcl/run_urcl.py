@@ -187,6 +187,11 @@ class Urtwin:
                      # white noise (σ 1e-5 rad against a 2.4e-5 rad count) a joint at rest reads
                      # one count off now and then; the quantisation stays.
                      "--set", "sensors.noise=false"]
+        # the dashboard's saveLog, flight report and support file (URCL's dashboard tests)
+        # write the controller's log here
+        log_dir = os.path.join(os.path.dirname(os.path.abspath(log_path)), "controller_log")
+        os.makedirs(log_dir, exist_ok=True)
+        self.args += ["--log-dir", log_dir]
         if version.startswith("5."):
             # as URCL's CI URSim: remote control disabled in Settings (the factory default), so
             # `is in remote control` answers false and the dashboard refuses nothing

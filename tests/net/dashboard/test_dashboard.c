@@ -310,6 +310,24 @@ static void test_dashboard__queries_reply_byte_exact(void **state) {
   assert_string_equal(say(fx, "safetymode"), "Safetymode: UNDEFINED_SAFETY_MODE");
 }
 
+// An owner's write_log: records the request, answers as the emulator's would
+static int g_log_what, g_log_fail;
+static char g_log_arg[64];
+static int fake_write_log(void *user, int what, const char *arg, size_t arg_len, char *out,
+                          size_t out_sz) {
+  (void)user;
+  g_log_what = what;
+  snprintf(g_log_arg, sizeof g_log_arg, "%.*s", (int)arg_len, arg);
+  if (g_log_fail) {
+    snprintf(out, out_sz, "disk full");
+    return -1;
+  }
+  snprintf(out, out_sz, "%s", what == URT_DASHBOARD_LOG_FLIGHT_REPORT ? "7"
+                              : what == URT_DASHBOARD_LOG_SUPPORT_FILE ? "/log/ur_support_file_1.zip"
+                                                                       : "/log/log_history.txt");
+  return 0;
+}
+
 static void test_dashboard__commands_with_fixed_replies(void **state) {
   fixture_t *fx = *state;
   assert_string_equal(say(fx, "popup Hello world"), "showing popup");
@@ -321,11 +339,27 @@ static void test_dashboard__commands_with_fixed_replies(void **state) {
   assert_int_equal(fx->act.log_len, strlen("Testing Log:"));
   assert_memory_equal(fx->act.log_text, "Testing Log:", fx->act.log_len);
   assert_string_equal(say(fx, "addToLog"), "No log message to add");
-  assert_string_equal(say(fx, "saveLog"), "Log saved to disk");
+  // without an owner that writes the log, the three log commands are refused, not faked
+  assert_string_equal(say(fx, "saveLog"), "Could not save log: this controller keeps no log folder");
   assert_string_equal(say(fx, "generate flight report controller"),
-                      "Flight Report generated with id: 1");
+                      "Flight Report could not be generated: this controller keeps no log folder");
   assert_string_equal(say(fx, "generate support file /tmp"),
-                      "Completed successfully: /tmp/ur_support_file.zip");
+                      "Support file could not be generated: this controller keeps no log folder");
+  assert_int_equal(fx->st.report_count, 0);
+  // with one, the reply carries what it wrote (id, file) or why it could not
+  fx->ctx.write_log = fake_write_log;
+  g_log_fail = 0;
+  assert_string_equal(say(fx, "saveLog"), "Log saved to disk");
+  assert_int_equal(g_log_what, URT_DASHBOARD_LOG_SAVE);
+  assert_string_equal(say(fx, "generate flight report controller"),
+                      "Flight Report generated with id: 7");
+  assert_int_equal(fx->st.report_count, 1);
+  assert_string_equal(say(fx, "generate support file /tmp"),
+                      "Completed successfully: /log/ur_support_file_1.zip");
+  assert_string_equal(g_log_arg, "/tmp");
+  g_log_fail = 1;
+  assert_string_equal(say(fx, "saveLog"), "Could not save log: disk full");
+  fx->ctx.write_log = NULL;
   assert_string_equal(say(fx, "set operational mode automatic"),
                       "Operational mode 'automatic' is set");
   assert_string_equal(say(fx, "get operational mode"), "AUTOMATIC");

@@ -59,7 +59,18 @@ typedef struct urt_dashboard_ctx {
    * allocate. Nullable (every existing file is accepted). */
   int (*prepare_program)(void *user, const char *host_path, char *why, size_t why_sz);
   void *prepare_user;
+  /* saveLog, generate flight report, generate support file DIR: the owner writes the
+   * controller's log (what = URT_DASHBOARD_LOG_*; arg: the command's argument). Returns 0 with
+   * out = the report id (flight report) or the file written (support file), or nonzero with
+   * out = why (one line); the reply says which. NULL: every such command is refused as by a
+   * controller that cannot write it. Runs on the thread that calls urt_dashboard_handle().
+   * Nullable. */
+  int (*write_log)(void *user, int what, const char *arg, size_t arg_len, char *out,
+                   size_t out_sz);
+  void *write_log_user;
 } urt_dashboard_ctx_t;
+
+enum { URT_DASHBOARD_LOG_SAVE = 1, URT_DASHBOARD_LOG_FLIGHT_REPORT, URT_DASHBOARD_LOG_SUPPORT_FILE };
 
 //---- robot state (filled by the caller from the snapshot before each line) ----
 

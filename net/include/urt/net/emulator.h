@@ -44,6 +44,9 @@ typedef struct urt_emulator_config {
   int max_clients;
   /* Bytes of output buffers all clients together may hold (0: URT_EMULATOR_OUT_BUDGET). */
   size_t out_budget;
+  /* An existing folder where the dashboard's saveLog, generate flight report and generate
+     support file write the controller's log (net/server/ctrl_log.h); NULL: they are refused. */
+  const char *log_dir;
 } urt_emulator_config_t;
 
 /* The defaults: a UR client stack opens 1–4 connections per port (ur_rtde's receive, control
