@@ -73,29 +73,40 @@ void joint_w_init(const urt_model_t* m, int j, int kind, const JointAux& aux, do
 // the same to the bit; but the kernel's run-time blocking cost more than the arithmetic, and
 // here the 18 sums stay in registers. GCC vector types: AVX/FMA where -march has them.
 // extra_col · extra, the arm angle's input column, ends the chain as Eigen's a += s v did.
+// With rows_apart (rows 16–17 zero in columns 0–15) the 2-lane skips those columns: it would
+// only add 0·r = ±0 to +0, which leaves +0, so the sums are the same bits for any finite r (a
+// non-finite r fills rows 0–15 with NaN either way, and the step is refused and redone).
 typedef double V4 __attribute__((vector_size(32)));
 typedef double V2 __attribute__((vector_size(16)));
 static_assert(URT_NXD == 18, "drive_solve is written for 18 drive states");
 
+template <bool rows_apart>
 inline void drive_solve(const double* winv, const double* r, const double* extra_col,
                         double extra, double* a) noexcept {
   V4 c0 = {0.0, 0.0, 0.0, 0.0}, c1 = c0, c2 = c0, c3 = c0;
   V2 c4 = {0.0, 0.0};
-  auto column = [&](const double* col, double b) {
+  auto column16 = [&](const double* col, double b) {
     V4 l0, l1, l2, l3;
-    V2 l4;
     std::memcpy(&l0, col, sizeof l0);
     std::memcpy(&l1, col + 4, sizeof l1);
     std::memcpy(&l2, col + 8, sizeof l2);
     std::memcpy(&l3, col + 12, sizeof l3);
-    std::memcpy(&l4, col + 16, sizeof l4);
     c0 = l0 * b + c0;
     c1 = l1 * b + c1;
     c2 = l2 * b + c2;
     c3 = l3 * b + c3;
+  };
+  auto column = [&](const double* col, double b) {
+    column16(col, b);
+    V2 l4;
+    std::memcpy(&l4, col + 16, sizeof l4);
     c4 = l4 * b + c4;
   };
-  for (int c = 0; c < URT_NXD; c++) {
+  constexpr int kSplit = rows_apart ? URT_NXD - 2 : 0;
+  for (int c = 0; c < kSplit; c++) {
+    column16(winv + c * URT_NXD, r[c]);
+  }
+  for (int c = kSplit; c < URT_NXD; c++) {
     column(winv + c * URT_NXD, r[c]);
   }
   column(extra_col, extra);
@@ -112,7 +123,11 @@ double joint_reduce(const JointW& w, const double* r, VecD& a_d, double* e_z) no
   *e_z = r[URT_X_Z] / (1.0 - w.gh * w.a_zz);
   double c0 = -w.t_z * *e_z;
   if (w.engaged) {
-    drive_solve(w.tab->winv, r, w.tab->winv_bq, w.gh * r[URT_X_Q], a_d.data());
+    if (w.tab->filter_rows_apart) {
+      drive_solve<true>(w.tab->winv, r, w.tab->winv_bq, w.gh * r[URT_X_Q], a_d.data());
+    } else {
+      drive_solve<false>(w.tab->winv, r, w.tab->winv_bq, w.gh * r[URT_X_Q], a_d.data());
+    }
     c0 += w.k_cs * a_d[URT_X_QCS] + w.c_cs * a_d[URT_X_QDCS] - w.k_cs * r[URT_X_Q];
   }
   return c0;
