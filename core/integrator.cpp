@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 #include "arm.hpp"
 #include "urt/drivers/friction.h"
@@ -254,6 +255,61 @@ void arm_linearisation(const urt_model_t* m, const urt_payload_t& load, const in
   wmat.noalias() += gh * bqd + (gh * gh) * bq;
 }
 
+//---- the 6×6 stage matrix ----
+
+// LU with partial pivoting of the (unsymmetric) stage matrix, the same arithmetic as Eigen's
+// PartialPivLU<Mat6> (its unblocked kernel for fixed sizes up to 16: pivot on the first
+// largest |a_ik|, swap whole rows, divide the column by the pivot, rank-1 update; the last
+// row is not pivoted), so factors and solutions keep their bits. Eigen's compute() goes
+// through run-time-sized blocks and also takes the L1 norm for rcond(), which nothing here
+// reads; written out, the factorisation costs a fraction.
+struct Lu6 {
+  Mat6 lu;
+  int tr[URT_NJ];  // row k was swapped with row tr[k] at step k
+};
+
+void lu6_factor(const Mat6& a, Lu6& f) noexcept {
+  Mat6& lu = f.lu;
+  lu = a;
+  for (int k = 0; k < URT_NJ - 1; k++) {
+    int p = k;
+    double big = std::fabs(lu(k, k));
+    for (int i = k + 1; i < URT_NJ; i++) {
+      double v = std::fabs(lu(i, k));
+      if (v > big) {
+        big = v;
+        p = i;
+      }
+    }
+    f.tr[k] = p;
+    if (big != 0.0) {
+      if (p != k) {
+        lu.row(k).swap(lu.row(p));
+      }
+      for (int i = k + 1; i < URT_NJ; i++) {
+        lu(i, k) /= lu(k, k);
+      }
+    }
+    for (int c = k + 1; c < URT_NJ; c++) {
+      for (int i = k + 1; i < URT_NJ; i++) {
+        lu(i, c) -= lu(i, k) * lu(k, c);
+      }
+    }
+  }
+  f.tr[URT_NJ - 1] = URT_NJ - 1;
+}
+
+// x = A⁻¹ b: the row swaps in order, then Eigen's own unrolled triangular solves.
+Vec6 lu6_solve(const Lu6& f, const Vec6& b) noexcept {
+  Vec6 x = b;
+  for (int k = 0; k < URT_NJ; k++) {
+    std::swap(x[k], x[f.tr[k]]);
+  }
+  f.lu.triangularView<Eigen::UnitLower>().solveInPlace(x);
+  f.lu.triangularView<Eigen::Upper>().solveInPlace(x);
+  return x;
+}
+
 //---- sub-stepped joints ----
 
 // One joint as a 1-DoF system on the frozen arm: M_pp q̈ = T_net + τ_ext − b.
@@ -400,7 +456,8 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
   if (!m->drives_engaged) {
     arm_linearisation(m, d->live.payload, sub, x, f, bq, wmat, gh);
   }
-  Eigen::PartialPivLU<Mat6> wfac(wmat);
+  Lu6 wfac;
+  lu6_factor(wmat, wfac);
 
   // one stage solve: per-joint reduction, the 6×6 arm system, back-substitution
   auto solve = [&](double (*rr)[URT_NXJ], double (*k)[URT_NXJ]) {
@@ -419,7 +476,7 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
       }
       rhs.noalias() -= gh * bq * rq;
     }
-    Vec6 kqd = wfac.solve(rhs);
+    Vec6 kqd = lu6_solve(wfac, rhs);
     for (int j = 0; j < URT_NJ; j++) {
       if (sub[j]) {
         std::memset(k[j], 0, sizeof k[j]);
