@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 #include "arm.hpp"
 #include "urt/drivers/friction.h"
@@ -73,29 +74,40 @@ void joint_w_init(const urt_model_t* m, int j, int kind, const JointAux& aux, do
 // the same to the bit; but the kernel's run-time blocking cost more than the arithmetic, and
 // here the 18 sums stay in registers. GCC vector types: AVX/FMA where -march has them.
 // extra_col · extra, the arm angle's input column, ends the chain as Eigen's a += s v did.
+// With rows_apart (rows 16–17 zero in columns 0–15) the 2-lane skips those columns: it would
+// only add 0·r = ±0 to +0, which leaves +0, so the sums are the same bits for any finite r (a
+// non-finite r fills rows 0–15 with NaN either way, and the step is refused and redone).
 typedef double V4 __attribute__((vector_size(32)));
 typedef double V2 __attribute__((vector_size(16)));
 static_assert(URT_NXD == 18, "drive_solve is written for 18 drive states");
 
+template <bool rows_apart>
 inline void drive_solve(const double* winv, const double* r, const double* extra_col,
                         double extra, double* a) noexcept {
   V4 c0 = {0.0, 0.0, 0.0, 0.0}, c1 = c0, c2 = c0, c3 = c0;
   V2 c4 = {0.0, 0.0};
-  auto column = [&](const double* col, double b) {
+  auto column16 = [&](const double* col, double b) {
     V4 l0, l1, l2, l3;
-    V2 l4;
     std::memcpy(&l0, col, sizeof l0);
     std::memcpy(&l1, col + 4, sizeof l1);
     std::memcpy(&l2, col + 8, sizeof l2);
     std::memcpy(&l3, col + 12, sizeof l3);
-    std::memcpy(&l4, col + 16, sizeof l4);
     c0 = l0 * b + c0;
     c1 = l1 * b + c1;
     c2 = l2 * b + c2;
     c3 = l3 * b + c3;
+  };
+  auto column = [&](const double* col, double b) {
+    column16(col, b);
+    V2 l4;
+    std::memcpy(&l4, col + 16, sizeof l4);
     c4 = l4 * b + c4;
   };
-  for (int c = 0; c < URT_NXD; c++) {
+  constexpr int kSplit = rows_apart ? URT_NXD - 2 : 0;
+  for (int c = 0; c < kSplit; c++) {
+    column16(winv + c * URT_NXD, r[c]);
+  }
+  for (int c = kSplit; c < URT_NXD; c++) {
     column(winv + c * URT_NXD, r[c]);
   }
   column(extra_col, extra);
@@ -112,7 +124,11 @@ double joint_reduce(const JointW& w, const double* r, VecD& a_d, double* e_z) no
   *e_z = r[URT_X_Z] / (1.0 - w.gh * w.a_zz);
   double c0 = -w.t_z * *e_z;
   if (w.engaged) {
-    drive_solve(w.tab->winv, r, w.tab->winv_bq, w.gh * r[URT_X_Q], a_d.data());
+    if (w.tab->filter_rows_apart) {
+      drive_solve<true>(w.tab->winv, r, w.tab->winv_bq, w.gh * r[URT_X_Q], a_d.data());
+    } else {
+      drive_solve<false>(w.tab->winv, r, w.tab->winv_bq, w.gh * r[URT_X_Q], a_d.data());
+    }
     c0 += w.k_cs * a_d[URT_X_QCS] + w.c_cs * a_d[URT_X_QDCS] - w.k_cs * r[URT_X_Q];
   }
   return c0;
@@ -237,6 +253,61 @@ void arm_linearisation(const urt_model_t* m, const urt_payload_t& load, const in
     }
   }
   wmat.noalias() += gh * bqd + (gh * gh) * bq;
+}
+
+//---- the 6×6 stage matrix ----
+
+// LU with partial pivoting of the (unsymmetric) stage matrix, the same arithmetic as Eigen's
+// PartialPivLU<Mat6> (its unblocked kernel for fixed sizes up to 16: pivot on the first
+// largest |a_ik|, swap whole rows, divide the column by the pivot, rank-1 update; the last
+// row is not pivoted), so factors and solutions keep their bits. Eigen's compute() goes
+// through run-time-sized blocks and also takes the L1 norm for rcond(), which nothing here
+// reads; written out, the factorisation costs a fraction.
+struct Lu6 {
+  Mat6 lu;
+  int tr[URT_NJ];  // row k was swapped with row tr[k] at step k
+};
+
+void lu6_factor(const Mat6& a, Lu6& f) noexcept {
+  Mat6& lu = f.lu;
+  lu = a;
+  for (int k = 0; k < URT_NJ - 1; k++) {
+    int p = k;
+    double big = std::fabs(lu(k, k));
+    for (int i = k + 1; i < URT_NJ; i++) {
+      double v = std::fabs(lu(i, k));
+      if (v > big) {
+        big = v;
+        p = i;
+      }
+    }
+    f.tr[k] = p;
+    if (big != 0.0) {
+      if (p != k) {
+        lu.row(k).swap(lu.row(p));
+      }
+      for (int i = k + 1; i < URT_NJ; i++) {
+        lu(i, k) /= lu(k, k);
+      }
+    }
+    for (int c = k + 1; c < URT_NJ; c++) {
+      for (int i = k + 1; i < URT_NJ; i++) {
+        lu(i, c) -= lu(i, k) * lu(k, c);
+      }
+    }
+  }
+  f.tr[URT_NJ - 1] = URT_NJ - 1;
+}
+
+// x = A⁻¹ b: the row swaps in order, then Eigen's own unrolled triangular solves.
+Vec6 lu6_solve(const Lu6& f, const Vec6& b) noexcept {
+  Vec6 x = b;
+  for (int k = 0; k < URT_NJ; k++) {
+    std::swap(x[k], x[f.tr[k]]);
+  }
+  f.lu.triangularView<Eigen::UnitLower>().solveInPlace(x);
+  f.lu.triangularView<Eigen::Upper>().solveInPlace(x);
+  return x;
 }
 
 //---- sub-stepped joints ----
@@ -385,7 +456,8 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
   if (!m->drives_engaged) {
     arm_linearisation(m, d->live.payload, sub, x, f, bq, wmat, gh);
   }
-  Eigen::PartialPivLU<Mat6> wfac(wmat);
+  Lu6 wfac;
+  lu6_factor(wmat, wfac);
 
   // one stage solve: per-joint reduction, the 6×6 arm system, back-substitution
   auto solve = [&](double (*rr)[URT_NXJ], double (*k)[URT_NXJ]) {
@@ -404,7 +476,7 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
       }
       rhs.noalias() -= gh * bq * rq;
     }
-    Vec6 kqd = wfac.solve(rhs);
+    Vec6 kqd = lu6_solve(wfac, rhs);
     for (int j = 0; j < URT_NJ; j++) {
       if (sub[j]) {
         std::memset(k[j], 0, sizeof k[j]);

@@ -33,6 +33,9 @@ struct DriveTables {
   double bd[URT_NXD];              // k_d = W⁻¹ r_d + γ h W⁻¹ B_q r_q + bd · k_q̇
   double fq_set[URT_NXD];          // ∂f_d/∂q_set    (for the ∂f/∂t term)
   double fqd_set[URT_NXD];         // ∂f_d/∂q̇_set
+  // 1: rows 16–17 of winv (the joint-position filter, driven by q alone) are zero in columns
+  // 0–15, so the solve leaves those products out (set by integrator_prepare from the numbers)
+  int filter_rows_apart;
 };
 
 enum StepKind { kMacro = 0, kSub = 1, kNumStepKinds = 2 };

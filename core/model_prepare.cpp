@@ -131,6 +131,7 @@ int integrator_prepare(const urt_model_t* m, urt_integrator_tables* tab) noexcep
         Eigen::Map<VecD>(t.bd) = bd;
         Eigen::Map<VecD>(t.fq_set) = f_qset;
         Eigen::Map<VecD>(t.fqd_set) = f_qdset;
+        t.filter_rows_apart = winv.bottomLeftCorner<2, URT_NXD - 2>().isZero(0.0);
         if (!winv.allFinite()) {
           return URT_ESOLVER;
         }
