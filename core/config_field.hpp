@@ -212,6 +212,7 @@ class Field {
   const std::string &path() const { return path_; }
   int line() const { return line_; }
   const Origin &origin() const { return *origin_; }
+  const YAML::Node &node() const { return node_; }
 
   [[noreturn]] void fail(const std::string &reason) const { origin_->fail(path_, line_, reason); }
 
@@ -291,6 +292,21 @@ class Field {
   }
 
   Map map(std::initializer_list<const char *> keys) const;
+  // A map with required keys and optional ones (Map::get tells which are there).
+  Map map(std::initializer_list<const char *> keys,
+          std::initializer_list<const char *> optional) const;
+
+  // A list of 1 to max elements, each with its own path and line.
+  std::vector<Field> list_up_to(size_t max) const {
+    std::string what = "must be a list of 1 to " + std::to_string(max);
+    if (!node_.IsSequence()) {
+      fail(what + " (got " + describe_node(node_) + ")");
+    }
+    if (node_.size() < 1 || node_.size() > max) {
+      fail(what + " (got " + std::to_string(node_.size()) + ")");
+    }
+    return list(node_.size());
+  }
 
   // A list of exactly n elements, each with its own path and line.
   std::vector<Field> list(size_t n) const {
@@ -339,7 +355,8 @@ class Field {
 // A map whose keys were checked: no unknown key, no duplicate, none of the listed keys missing.
 class Map {
  public:
-  Map(const Field &self, const YAML::Node &node, std::initializer_list<const char *> keys) {
+  Map(const Field &self, const YAML::Node &node, std::initializer_list<const char *> keys,
+      std::initializer_list<const char *> optional = {}) {
     if (!node.IsMap()) {
       self.fail("must be a map (got " + describe_node(node) + ")");
     }
@@ -358,6 +375,9 @@ class Map {
       std::string path = join_key(self.path(), key);
       bool known = false;
       for (const char *allowed : keys) {
+        known = known || key == allowed;
+      }
+      for (const char *allowed : optional) {
         known = known || key == allowed;
       }
       if (!known) {
@@ -384,6 +404,8 @@ class Map {
 
   // only keys passed to the constructor: they are all present
   const Field &operator[](const char *key) const { return *find(key); }
+  // a key passed as optional, or nullptr when the file does not have it
+  const Field *get(const char *key) const { return find(key); }
 
  private:
   const Field *find(const char *key) const {
@@ -399,6 +421,10 @@ class Map {
 };
 
 inline Map Field::map(std::initializer_list<const char *> keys) const { return Map(*this, node_, keys); }
+inline Map Field::map(std::initializer_list<const char *> keys,
+                      std::initializer_list<const char *> optional) const {
+  return Map(*this, node_, keys, optional);
+}
 
 }  // namespace urt::core::config
 
