@@ -47,6 +47,8 @@ constexpr ClassInfo kClasses[URT_FAULT_NCLASSES] = {
     {"brake_drag", "N m", nullptr, 0.0, 28.0, 0, 0},
     // foam / cable / carton impacts [S,19]: up to 500 N at the TCP [P]
     {"collision", "N", nullptr, 0.0, 500.0, 0, 0},
+    // d ramps to fracture [S,3]: up to a 90 % local stiffness dip [P]
+    {"crack", "1", nullptr, 0.0, 0.9, 0, 0},
 };
 
 constexpr const char* kProfiles[] = {"step", "linear", "exp", "intermittent", "random_walk"};
@@ -319,6 +321,10 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
         break;
       case URT_FAULT_BRAKE_DRAG:
         drag[j] += s;
+        break;
+      case URT_FAULT_CRACK:
+        // the modulation follows the WG angle inside the step (core/joint.cpp)
+        e->crack = std::fmin(0.9, e->crack + s);
         break;
       case URT_FAULT_COLLISION:
         for (int i = 0; i < 3; i++) {

@@ -3,6 +3,8 @@
 // the sensor filters. Equations live in the drivers' headers; this file only wires them.
 #include "joint.hpp"
 
+#include <cmath>
+
 #include "urt/data.h"
 #include "urt/drivers/friction_inline.h"
 #include "urt/drivers/harmonic_drive_inline.h"
@@ -62,7 +64,19 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
 
   // gear between the motor and the arm's joint angle, then the motor, then the sensors
   urt_harmonic_drive_ends_t ge = {ms.q_m, ms.qd_m, x[URT_X_Q], x[URT_X_QD]};
-  urt_harmonic_drive_out_t go = urt_harmonic_drive_eval_inline(&gp, &gs, &ge);
+  const urt_harmonic_drive_params_t* gq = &gp;
+  urt_harmonic_drive_params_t cracked;
+  if (fj && fj->crack > 0.0) {
+    // a flexspline crack: the mesh stiffness dips while a WG lobe passes it, twice per WG
+    // revolution against the (fixed) flexspline
+    // (cos², the modulation at exactly twice the WG rate: a narrower dip adds its harmonics,
+    // which the loop's response can make stronger than the fundamental)
+    const double c = std::cos(gs.q_wg);
+    cracked = gp;
+    cracked.k_m *= 1.0 - fj->crack * c * c;
+    gq = &cracked;
+  }
+  urt_harmonic_drive_out_t go = urt_harmonic_drive_eval_inline(gq, &gs, &ge);
   urt_motor_deriv_t md = urt_motor_deriv_inline(&mp, &ms, co.v_sup, go.t_in);
   urt_sensors_state_t sd = urt_sensors_deriv_inline(&m->sensors[j], &ss, ms.i, ms.qd_m, x[URT_X_Q]);
 

@@ -234,6 +234,55 @@ static void test_faults__gear_stiffness_loss_is_the_model_with_k_m_edited(void *
   urt_model_free(me);
 }
 
+static void test_faults__crack_puts_a_current_line_at_twice_the_wave_generator_frequency(
+    void **state) {
+  (void)state;
+  // wrist 3 at 2 rad/s: the WG turns at τ·2 rad/s; a crack in the (fixed) flexspline is passed
+  // by both lobes each WG revolution, so the current difference to the healthy run has its
+  // strongest line at 2·f_WG (faults.md's 2·f_WG·(1 + 1/N) is for a turning flexspline; here
+  // the circular spline is the output and 1/N = 1 % apart)
+  const int j = 5;
+  urt_fault_spec_t f = spec(URT_FAULT_CRACK, j, 0.5);
+  urt_model_t *m = urt_test_model(urt_test_quiet);
+  urt_data_t *h = new_data(m), *d = new_data(m);
+  install(m, d, &f, 1);
+  h->cmd.qd[j] = d->cmd.qd[j] = 2.0;
+  run(m, h, 0.3);
+  run(m, d, 0.3);
+  enum { kN = 1000, kDec = 20 };  // 1 s at 1 kHz
+  static double diff[kN];
+  for (int k = 0; k < kN; k++) {
+    for (int s = 0; s < kDec; s++) {
+      assert_int_equal(urt_step(m, h), URT_OK);
+      assert_int_equal(urt_step(m, d), URT_OK);
+    }
+    diff[k] = d->x[j][URT_X_I] - h->x[j][URT_X_I];
+  }
+  const double f_wg = fabs(d->x[j][URT_X_QDWG]) / (2.0 * M_PI);
+  // Hann-windowed DFT on a 0.02 Hz grid from 5 to 300 Hz
+  double best = 0.0, f_best = 0.0;
+  for (double fr = 5.0; fr < 300.0; fr += 0.02) {
+    double re = 0.0, im = 0.0;
+    for (int k = 0; k < kN; k++) {
+      double w = 0.5 - 0.5 * cos(2.0 * M_PI * k / (kN - 1));
+      double ph = 2.0 * M_PI * fr * k * kDec * m->dt;
+      re += w * diff[k] * cos(ph);
+      im += w * diff[k] * sin(ph);
+    }
+    double a = re * re + im * im;
+    if (a > best) {
+      best = a;
+      f_best = fr;
+    }
+  }
+  print_message("f_WG %.3f Hz; catalogue 2 f_WG (1 + 1/N) = %.3f Hz\n", f_wg,
+                2.0 * f_wg * (1.0 + 1.0 / m->gear[j].ratio));
+  expect_rel("strongest current line of the crack", f_best, 2.0 * f_wg, 0.02);
+  free(h);
+  free(d);
+  urt_model_free(m);
+}
+
 /* ---- encoders ---- */
 
 /* TCP position Jacobian column j by central differences of the forward kinematics */
@@ -579,6 +628,7 @@ int main(void) {
       cmocka_unit_test(test_faults__lubricant_scales_the_sliding_friction),
       cmocka_unit_test(test_faults__brake_drag_adds_its_coulomb_torque),
       cmocka_unit_test(test_faults__gear_stiffness_loss_is_the_model_with_k_m_edited),
+      cmocka_unit_test(test_faults__crack_puts_a_current_line_at_twice_the_wave_generator_frequency),
       cmocka_unit_test(test_faults__joint_encoder_bias_moves_the_tcp_by_the_jacobian_times_it),
       cmocka_unit_test(test_faults__joint_encoder_drift_walks_the_arm_at_its_rate),
       cmocka_unit_test(test_faults__joint_encoder_noise_has_its_sigma),

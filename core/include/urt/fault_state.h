@@ -38,6 +38,8 @@ enum {
   URT_FAULT_SUPPLY_SAG,         /* the bus (PWM saturation) at V_net − s               [V]  */
   URT_FAULT_BRAKE_DRAG,         /* a Coulomb torque s added to the joint's friction    [N m] */
   URT_FAULT_COLLISION,          /* a force s at the TCP along `direction` (base frame) [N]  */
+  URT_FAULT_CRACK,              /* flexspline crack of depth s: K_m ×(1 − s cos²(q_WG)), a dip
+                                 * each time one of the WG's two lobes passes it            [1]  */
   URT_FAULT_NCLASSES
 };
 
@@ -92,6 +94,7 @@ typedef struct urt_fault_joint {
   double q_noise, qdm_noise;   /* this step's encoder noise draws                     */
   int32_t q_stuck, qdm_stuck;  /* 1: the measurement holds q_hold / qdm_hold           */
   double q_hold, qdm_hold;
+  double crack;                /* crack depth: K_m dips by this fraction under a lobe  */
   double z_max;                /* LuGre's bound on |z| with these friction levels [rad] */
 } urt_fault_joint_t;
 
