@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "arm.hpp"
+#include "step_internal.h"
 #include "urt/drivers/friction.h"
 
 namespace urt::core {
@@ -381,7 +382,8 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
   for (int j = 0; j < URT_NJ; j++) {
     q_n[j] = x[j][URT_X_Q];
   }
-  wrench_torque(m->arm, q_n, d->wrench_ext, tau_ext);
+  double w_tot[6];
+  wrench_torque(m->arm, q_n, urt__wrench_total(d, w_tot), tau_ext);
 
   // the arm at x_n, once for the sub-steps and the macro step's first stage
   Mat6 mass_n;

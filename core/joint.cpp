@@ -3,6 +3,8 @@
 // the sensor filters. Equations live in the drivers' headers; this file only wires them.
 #include "joint.hpp"
 
+#include <cmath>
+
 #include "urt/data.h"
 #include "urt/drivers/friction_inline.h"
 #include "urt/drivers/harmonic_drive_inline.h"
@@ -14,8 +16,10 @@ namespace urt::core {
 
 void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& in, int forced,
                double* f, JointAux* aux) noexcept {
-  const urt_pi_cascade_params_t& pc = m->control[j];
-  const urt_harmonic_drive_params_t& gp = m->gear[j];
+  const urt_fault_joint_t* fj = in.fault;
+  const urt_pi_cascade_params_t& pc = fj ? fj->control : m->control[j];
+  const urt_harmonic_drive_params_t& gp = fj ? fj->gear : m->gear[j];
+  const urt_motor_params_t& mp = fj ? fj->motor : m->motor[j];
 
   // the drivers' states, gathered from the joint's slice of x
   urt_motor_state_t ms = {x[URT_X_I], x[URT_X_QM], x[URT_X_QDM]};
@@ -33,6 +37,12 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
   }
   double qdm_fb = ss.w + in.eps_w;
   double q_fb = ss.p + in.eps_q;
+  if (fj) {
+    // sensor faults: the measurement chain's gain, offset, bias, noise, or a stuck value
+    i_fb = fj->i_gain * (ss.i_f + in.eps_i) + in.i_offset + fj->i_bias;
+    qdm_fb = fj->qdm_stuck ? fj->qdm_hold : qdm_fb + fj->qdm_bias + fj->qdm_noise;
+    q_fb = fj->q_stuck ? fj->q_hold : q_fb + fj->q_bias + fj->q_noise;
+  }
 
   // controller: natural saturations, or forced ones for the tables
   urt_pi_cascade_in_t ci = {in.q_set, in.qd_set, in.i_ff, q_fb, qdm_fb, i_fb, in.torque};
@@ -54,8 +64,20 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
 
   // gear between the motor and the arm's joint angle, then the motor, then the sensors
   urt_harmonic_drive_ends_t ge = {ms.q_m, ms.qd_m, x[URT_X_Q], x[URT_X_QD]};
-  urt_harmonic_drive_out_t go = urt_harmonic_drive_eval_inline(&gp, &gs, &ge);
-  urt_motor_deriv_t md = urt_motor_deriv_inline(&m->motor[j], &ms, co.v_sup, go.t_in);
+  const urt_harmonic_drive_params_t* gq = &gp;
+  urt_harmonic_drive_params_t cracked;
+  if (fj && fj->crack > 0.0) {
+    // a flexspline crack: the mesh stiffness dips while a WG lobe passes it, twice per WG
+    // revolution against the (fixed) flexspline
+    // (cos², the modulation at exactly twice the WG rate: a narrower dip adds its harmonics,
+    // which the loop's response can make stronger than the fundamental)
+    const double c = std::cos(gs.q_wg);
+    cracked = gp;
+    cracked.k_m *= 1.0 - fj->crack * c * c;
+    gq = &cracked;
+  }
+  urt_harmonic_drive_out_t go = urt_harmonic_drive_eval_inline(gq, &gs, &ge);
+  urt_motor_deriv_t md = urt_motor_deriv_inline(&mp, &ms, co.v_sup, go.t_in);
   urt_sensors_state_t sd = urt_sensors_deriv_inline(&m->sensors[j], &ss, ms.i, ms.qd_m, x[URT_X_Q]);
 
   f[URT_X_I] = md.di;
@@ -111,14 +133,19 @@ JointInput joint_input(const urt_model_t* m, const urt_data_t* d, int j, double 
   in.eps_q = d->eps_q[j];
   in.drives_engaged = m->drives_engaged;
   in.torque = (int)((c.torque_mask >> j) & 1u);
+  if ((d->faults.joint_mask >> j) & 1u) {
+    in.fault = &d->faults.joint[j];
+  }
   return in;
 }
 
 double joint_rates(const urt_model_t* m, const urt_data_t* d, int j, double s, const double* x,
                    double* f, JointAux* aux) noexcept {
-  drive_rhs(m, j, x, joint_input(m, d, j, s), kNatural, f, aux);
+  const JointInput in = joint_input(m, d, j, s);
+  drive_rhs(m, j, x, in, kNatural, f, aux);
   urt_friction_state_t fs = {x[URT_X_Z]};
-  aux->fr = urt_friction_eval_inline(&m->friction[j], &fs, x[URT_X_QD]);
+  const urt_friction_params_t& fp = in.fault ? in.fault->friction : m->friction[j];
+  aux->fr = urt_friction_eval_inline(&fp, &fs, x[URT_X_QD]);
   f[URT_X_Q] = x[URT_X_QD];
   f[URT_X_Z] = aux->fr.dz;
   return aux->t_cs - aux->fr.t_f;

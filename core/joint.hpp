@@ -30,6 +30,9 @@ struct JointInput {
   double i_offset;         // zero offset of the current measurement [A]
   int drives_engaged;
   int torque;              // 1: torque mode (urt_command_t.torque_mask)
+  // the joint's parameters and sensor errors as its faults make them (urt/faults.h), or
+  // nullptr for a healthy joint, which then reads the model's exactly as before
+  const urt_fault_joint_t* fault = nullptr;
 };
 
 // Signals computed along the way, for outputs and for the integrator.

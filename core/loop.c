@@ -156,6 +156,9 @@ int urt_loop_create(const urt_model_t *m, const urt_loop_config_t *cfg, const do
     urt_seqlock_init(&l->drive_history[i], sizeof(urt_drive_sample_t));
   }
   int rc = urt_data_init(m, &l->d, q0);
+  if (rc == 0 && cfg->faults.n > 0) {
+    rc = urt_data_set_faults(m, &l->d, &cfg->faults);
+  }
   if (rc == 0) {
     rc = urt_ctrl_init(m, &l->c, &l->d, cfg->period, cfg->powered);
   }

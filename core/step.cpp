@@ -12,6 +12,7 @@
 #include "step_internal.h"
 #include "urt/core.h"
 #include "urt/drivers/friction.h"
+#include "urt/faults.h"
 
 namespace {
 
@@ -41,7 +42,10 @@ bool step_plausible(const urt_model_t* m, const urt_data_t* d) {
     return false;
   }
   for (int j = 0; j < URT_NJ; j++) {
-    if (m->friction[j].enabled && std::fabs(d->x[j][URT_X_Z]) > 1.5 * m->tables->z_max[j]) {
+    // a faulted joint's friction levels bound z by their own g (urt_fault_joint_t.z_max)
+    const double z_max = ((d->faults.joint_mask >> j) & 1u) ? d->faults.joint[j].z_max
+                                                             : m->tables->z_max[j];
+    if (m->friction[j].enabled && std::fabs(d->x[j][URT_X_Z]) > 1.5 * z_max) {
       return false;
     }
     if (m->drives_engaged && std::fabs(d->x[j][URT_X_QD]) > 10.0 * m->joint[j].qd_max) {
@@ -164,12 +168,18 @@ extern "C" void urt__step_finish(const urt_model_t* m, urt_data_t* d,
   // sample and hold the sensors for the next step; the outputs that show them are computed
   // at the rate someone reads them (urt_data_update_outputs), not at every physics step
   urt_sensors_sample(m, d);
+
+  // the faults at the new step's start time: severities, effective parameters, sensor errors
+  if (d->faults.s.n > 0) {
+    urt_faults_advance(m, d);
+  }
 }
 
 extern "C" void urt_rhs(const urt_model_t* m, const urt_data_t* d, double s, const double* x,
                         double* xdot) {
   using urt::core::Vec6;
   Vec6 tau, q, qd, tau_ext, bias;
+  double w_tot[6];
 
   // joints: drives and friction; the arm's external wrench enters as Jᵀ F at the current q
   for (int j = 0; j < URT_NJ; j++) {
@@ -179,7 +189,7 @@ extern "C" void urt_rhs(const urt_model_t* m, const urt_data_t* d, double s, con
     q[j] = xj[URT_X_Q];
     qd[j] = xj[URT_X_QD];
   }
-  urt::core::wrench_torque(m->arm, q, d->wrench_ext, tau_ext);
+  urt::core::wrench_torque(m->arm, q, urt__wrench_total(d, w_tot), tau_ext);
   tau += tau_ext;
 
   // arm: the whole coupled 6-DoF forward dynamics, no splitting

@@ -20,6 +20,18 @@ int urt__command_check(const urt_model_t *m, urt_data_t *d);
  * forward, sensors sampled and outputs refreshed. Context: RT. */
 void urt__step_finish(const urt_model_t *m, urt_data_t *d, const double (*x0)[URT_NXJ]);
 
+/* The wrench the arm feels at the TCP: d->wrench_ext, plus a collision fault's while one is
+ * active (then summed into buf, which is returned). Context: RT. */
+static inline const double *urt__wrench_total(const urt_data_t *d, double buf[6]) {
+  if (d->faults.s.n == 0) {
+    return d->wrench_ext;
+  }
+  for (int i = 0; i < 6; i++) {
+    buf[i] = d->wrench_ext[i] + d->faults.wrench[i];
+  }
+  return buf;
+}
+
 #ifdef __cplusplus
 }
 #endif

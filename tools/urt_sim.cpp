@@ -68,6 +68,7 @@ struct Options {
   double rtol = 1e-10;
   bool compare = false;
   long decimate = 1;
+  std::string faults;              // --faults: a fault scenario file (urt/faults.h)
   std::string out;                 // empty: no CSV
   bool print_model = false;
   bool json = false;
@@ -98,6 +99,9 @@ void usage(FILE *f) {
       "                         max tracking error |q_set - q| [deg] of each; with --out,\n"
       "                         write both traces (see below)\n"
       "      --decimate N       write every Nth step to the CSV (default 1)\n"
+      "      --faults FILE      inject the fault scenario FILE (YAML, core/include/urt/faults.h)\n"
+      "                         into the run (both runs with --compare); the CSV gains the\n"
+      "                         ground truth per fault: fault<k>_<class>_active, _severity\n"
       "  -o, --out PATH         CSV file to write. With --compare: PATH.csv gives\n"
       "                         PATH.fixed.csv, PATH.reference.csv and PATH.summary.txt;\n"
       "                         any other PATH is a directory that receives fixed.csv,\n"
@@ -165,7 +169,8 @@ int parse_args(int argc, char **argv, Options *o) {
     OPT_REPLAY,
     OPT_SUMMARY_JSON,
     OPT_PLOT,
-    OPT_NOISE
+    OPT_NOISE,
+    OPT_FAULTS
   };
   static const struct option options[] = {
       {"config", required_argument, nullptr, 'c'},
@@ -187,6 +192,7 @@ int parse_args(int argc, char **argv, Options *o) {
       {"summary-json", required_argument, nullptr, OPT_SUMMARY_JSON},
       {"plot", required_argument, nullptr, OPT_PLOT},
       {"noise", no_argument, nullptr, OPT_NOISE},
+      {"faults", required_argument, nullptr, OPT_FAULTS},
       {"quiet", no_argument, nullptr, 'q'},
       {"help", no_argument, nullptr, 'h'},
       {nullptr, 0, nullptr, 0},
@@ -281,6 +287,9 @@ int parse_args(int argc, char **argv, Options *o) {
       case OPT_NOISE:
         o->noise = true;
         break;
+      case OPT_FAULTS:
+        o->faults = optarg;
+        break;
       case 'q':
         o->quiet = true;
         break;
@@ -306,6 +315,11 @@ int parse_args(int argc, char **argv, Options *o) {
   if (o->realtime && (o->reference || o->compare)) {
     std::fprintf(stderr, "urt_sim: CVODE runs far slower than real time: --realtime cannot be "
                          "combined with --reference or --compare\n");
+    return 2;
+  }
+  if (!o->replay.empty() && !o->faults.empty()) {
+    std::fprintf(stderr, "urt_sim: --faults is not supported with --replay (a replay plays a "
+                         "recording of a healthy robot): drop one of them\n");
     return 2;
   }
   if (!o->replay.empty() && (o->compare || o->reference || o->realtime || o->print_model)) {
@@ -343,7 +357,7 @@ class Csv {
  public:
   ~Csv() { close(); }
 
-  bool open(const std::string &path) {
+  bool open(const std::string &path, const urt_fault_scenario_t &faults) {
     f_ = std::fopen(path.c_str(), "w");
     if (!f_) {
       std::fprintf(stderr, "urt_sim: %s: %s\n", path.c_str(), std::strerror(errno));
@@ -360,7 +374,15 @@ class Csv {
         std::fprintf(f_, ",%s_%d", c, j);
       }
     }
-    std::fputs(",tcp_x,tcp_y,tcp_z,tcp_rx,tcp_ry,tcp_rz\n", f_);
+    std::fputs(",tcp_x,tcp_y,tcp_z,tcp_rx,tcp_ry,tcp_rz", f_);
+    // ground truth, one pair per fault of the scenario: numbered, so that two faults of one
+    // class stay apart
+    nfaults_ = faults.n;
+    for (int k = 0; k < faults.n; k++) {
+      const char *c = urt_fault_class_name(faults.f[k].cls);
+      std::fprintf(f_, ",fault%d_%s_active,fault%d_%s_severity", k, c, k, c);
+    }
+    std::fputc('\n', f_);
     return true;
   }
 
@@ -377,6 +399,9 @@ class Csv {
     }
     for (int k = 0; k < 6; k++) {
       std::fprintf(f_, ",%.17g", d.tcp_pose[k]);
+    }
+    for (int k = 0; k < nfaults_; k++) {
+      std::fprintf(f_, ",%d,%.17g", (int)d.faults.active[k], d.faults.severity[k]);
     }
     std::fputc('\n', f_);
   }
@@ -398,6 +423,7 @@ class Csv {
  private:
   FILE *f_ = nullptr;
   std::string path_;
+  int nfaults_ = 0;
 };
 
 //---- one simulated robot: fixed-step or CVODE ----
@@ -514,7 +540,8 @@ void print_compare(FILE *f, const urt_model_t *m, const Sim &fx, const Sim &rf,
 
 // Play tr through m (one or two simulations), write the traces and report. Returns the exit
 // status. The simulations are locals, so their CVODE memory is gone before m is freed.
-int run(const Options &o, const urt_model_t *m, const urt_traj_t *tr) {
+int run(const Options &o, const urt_model_t *m, const urt_traj_t *tr,
+        const urt_fault_scenario_t &faults) {
   int rc;
 
   // how many steps: 0 with --realtime means until a signal
@@ -537,6 +564,11 @@ int run(const Options &o, const urt_model_t *m, const urt_traj_t *tr) {
       std::fprintf(stderr, "urt_sim: urt_data_init: %s\n", urt_strerror(rc));
       return 1;
     }
+    rc = urt_data_set_faults(m, &s->d, &faults);
+    if (rc != 0) {
+      std::fprintf(stderr, "urt_sim: urt_data_set_faults: %s\n", urt_strerror(rc));
+      return 1;
+    }
   }
   if (o.reference || o.compare) {
     Sim *s = o.compare ? &ref_sim : &fixed_sim;
@@ -553,10 +585,10 @@ int run(const Options &o, const urt_model_t *m, const urt_traj_t *tr) {
     bool ok;
     if (o.compare) {
       std::string pf, pr;
-      ok = compare_paths(o.out, &pf, &pr, &summary_path) && fixed_sim.csv.open(pf) &&
-           ref_sim.csv.open(pr);
+      ok = compare_paths(o.out, &pf, &pr, &summary_path) && fixed_sim.csv.open(pf, faults) &&
+           ref_sim.csv.open(pr, faults);
     } else {
-      ok = fixed_sim.csv.open(o.out);
+      ok = fixed_sim.csv.open(o.out, faults);
     }
     if (!ok) {
       return 1;
@@ -895,7 +927,19 @@ int main(int argc, char **argv) {
     return 2;
   }
 
-  rc = run(o, m, &tr);
+  // the fault scenario, validated against this model (a bad file: its error, exit 2)
+  urt_fault_scenario_t faults;
+  std::memset(&faults, 0, sizeof faults);
+  if (!o.faults.empty()) {
+    rc = urt_faults_load(m, o.faults.c_str(), &faults, err, sizeof err);
+    if (rc != 0) {
+      std::fprintf(stderr, "%s\n", err);
+      urt_model_free(m);
+      return 2;
+    }
+  }
+
+  rc = run(o, m, &tr, faults);
   urt_model_free(m);
   return rc;
 }

@@ -4,7 +4,7 @@
 //
 //   urtwin [--config FILE] [--overlay FILE]... [--set KEY=VALUE]... [--bind ADDR] [--port-offset N]
 //          [--controller-version 5.19|3.15|…] [--rate 20000|10000] [--pacing tick|step|free|lockstep]
-//          [--seed N] [--q0 q1,…,q6] [--boot ready|power-off] [--lcm] [--lcm-url URL] …
+//          [--seed N] [--q0 q1,…,q6] [--faults FILE] [--boot ready|power-off] [--lcm] [--lcm-url URL] …
 //          [--dds] [--dds-domain N] [--dds-config FILE] [--dds-prefix NS] …
 //
 // Exit status: 0 after a clean stop, 1 run-time failure (a port cannot be bound, …),
@@ -39,6 +39,7 @@ struct Options {
   std::string config = "config/ur5.yaml";
   std::vector<std::string> sets;
   std::vector<std::string> overlays;  // --overlay FILE, applied in order before --set
+  std::string faults;                 // --faults FILE: a fault scenario (urt/faults.h)
   std::string bind = "127.0.0.1";
   int port_offset = 0;
   std::string version = "5.19";
@@ -207,6 +208,8 @@ int main(int argc, char** argv) {
   app.add_option("--overlay", o.overlays,
                  "apply an overlay file after the config, before --set (repeatable, in order)");
   app.add_option("-s,--set", o.sets, "override a config value, KEY=VALUE (repeatable)");
+  app.add_option("--faults", o.faults,
+                 "inject the fault scenario FILE (YAML, core/include/urt/faults.h) from start");
   app.add_option("--bind", o.bind, "IPv4 address every server binds")->capture_default_str();
   app.add_option("--port-offset", o.port_offset, "added to every port (several emulators per host)")
       ->check(CLI::Range(0, 30000))->capture_default_str();
@@ -370,6 +373,12 @@ int main(int argc, char** argv) {
   }
 
   urt_loop_config_t lc{};
+  if (!o.faults.empty() &&
+      urt_faults_load(m, o.faults.c_str(), &lc.faults, err, sizeof err) != 0) {
+    std::fprintf(stderr, "urtwin: %s\n", err);
+    urt_model_free(m);
+    return 2;
+  }
   lc.period = urt_version_period(&version);
   lc.pacing = o.pacing == "step"       ? URT_PACING_STEP
               : o.pacing == "free"     ? URT_PACING_FREE

@@ -12,6 +12,7 @@
 
 #include "urt/data.h"
 #include "urt/errors.h"
+#include "urt/faults.h"
 #include "urt/model.h"
 
 #ifdef __cplusplus

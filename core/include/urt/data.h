@@ -8,6 +8,7 @@
 #include <stdint.h>
 
 #include "urt/drivers/sensors.h"
+#include "urt/fault_state.h"
 #include "urt/model.h"
 
 #ifdef __cplusplus
@@ -112,6 +113,10 @@ typedef struct urt_data {
   /* parameters — the model's values that a run may change (last: the layout before them is
    * the one the recorded controller hashes fold) */
   urt_live_params_t live;
+
+  /* faults — the installed scenario and what it does at the current step (urt/faults.h); all
+   * zero: none. After live, so that a run without faults keeps the recorded hashes. */
+  urt_fault_state_t faults;
 } urt_data_t;
 
 #ifdef __cplusplus

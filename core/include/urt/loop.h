@@ -16,6 +16,7 @@
 #include <stdint.h>
 
 #include "urt/controller.h"
+#include "urt/faults.h"
 #include "urt/model.h"
 #include "urt/snapshot.h"
 
@@ -41,6 +42,7 @@ typedef struct urt_loop_config {
   int rt_priority;       /* SCHED_FIFO priority, 0: do not ask                */
   int lock_memory;       /* 1: best-effort mlockall + stack prefault          */
   double drive_rate;     /* drive samples per second (0: none), at most 1/m->dt */
+  urt_fault_scenario_t faults;  /* installed at start (urt/faults.h); n = 0: none */
 } urt_loop_config_t;
 
 /* The drive internals at a rate set apart from the controller's (up to 1 kHz and more),
