@@ -54,6 +54,9 @@ $(VENV)/.stamp: tools/requirements.txt
 build: deps
 	cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DURT_PYTHON=$(abspath $(PY)) >/dev/null
 	cmake --build build -j $(JOBS)
+	@# `import urtwin` from the venv: its site-packages gets this checkout's python/ (where the
+	@# build put the extension beside the package's sources)
+	echo "$(abspath python)" > "$$($(PY) -c 'import sysconfig; print(sysconfig.get_path("purelib"))')/urtwin-checkout.pth"
 
 # clang, because libFuzzer comes with it; no SUNDIALS (the reference is left to the release run)
 build-asan: deps
