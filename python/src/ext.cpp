@@ -80,9 +80,7 @@ class Model {
     return s;
   }
 
-  Array vec6(const double *v) const {
-    return to_numpy(std::vector<double>(v, v + URT_NJ), {(size_t)URT_NJ});
-  }
+  std::vector<double> vec6(const double *v) const { return std::vector<double>(v, v + URT_NJ); }
 
   std::vector<std::string> joint_names() const {
     std::vector<std::string> n;

@@ -89,9 +89,9 @@ class Model:
     dt = property(lambda self: self._m.dt)
     seed = property(lambda self: self._m.seed)
     name = property(lambda self: self._m.name)
-    q0 = property(lambda self: self._m.q0)
-    q_min = property(lambda self: self._m.q_min)
-    q_max = property(lambda self: self._m.q_max)
+    q0 = property(lambda self: np.array(self._m.q0))
+    q_min = property(lambda self: np.array(self._m.q_min))
+    q_max = property(lambda self: np.array(self._m.q_max))
     joint_names = property(lambda self: self._m.joint_names)
     payload_mass = property(lambda self: self._m.payload_mass)
 
