@@ -235,6 +235,12 @@ def load_sweep(path):
 
     # every model and every trajectory now, so that a bad one stops the sweep before it writes
     s["decimate"] = {}
+    try:
+        urtwin.Model(s["config"], s["overlays"], s["overrides"], s["rate"])
+    except ValueError as e:
+        key = "overrides" if ":override:" in str(e) else (
+            "overlays" if any(str(e).startswith(o) for o in s["overlays"]) else "config")
+        raise err(key, str(e)) from None
     for p in s["payloads"]:
         try:
             m = model_for(s, p)
