@@ -220,6 +220,7 @@ nb::tuple run(const Model &model, const urtpy::Trajectory &tr, double duration, 
   nb::dict info;
   info["steps"] = out.steps;
   info["wall_s"] = out.wall_s;
+  info["cpu_s"] = out.cpu_s;
   info["dt"] = model.get()->dt;
   size_t rows = out.rows, w = (size_t)out.row_width;
   return nb::make_tuple(to_numpy(std::move(out.data), {rows, w}), chans, info);

@@ -17,9 +17,9 @@ namespace urtpy {
 
 namespace {
 
-int64_t now_ns() {
+int64_t now_ns(clockid_t clock = CLOCK_MONOTONIC) {
   struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
+  clock_gettime(clock, &ts);
   return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
@@ -236,7 +236,7 @@ int run(const urt_model_t *m, const Trajectory &tr, const RunSpec &spec, RunOutp
   }
   const uint64_t thermal_steps = std::max<int64_t>(1, std::llround(kThermalPeriod / m->dt));
 
-  const int64_t wall0 = now_ns();
+  const int64_t wall0 = now_ns(), cpu0 = now_ns(CLOCK_THREAD_CPUTIME_ID);
   uint64_t k = 0;
   char msg[256];
   for (;; k++) {
@@ -271,6 +271,7 @@ int run(const urt_model_t *m, const Trajectory &tr, const RunSpec &spec, RunOutp
     }
   }
   out->wall_s = 1e-9 * (double)(now_ns() - wall0);
+  out->cpu_s = 1e-9 * (double)(now_ns(CLOCK_THREAD_CPUTIME_ID) - cpu0);
   out->steps = k;
   out->data.resize(out->rows * (size_t)out->row_width);
   return rc;

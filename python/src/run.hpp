@@ -61,6 +61,7 @@ struct RunOutput {
   std::vector<double> data;  // rows × row_width, row-major
   uint64_t steps = 0;
   double wall_s = 0.0;       // wall time of the stepping loop
+  double cpu_s = 0.0;        // its CPU time (this thread's: a busy machine's measure)
   std::string error;         // set when run() returns non-zero
 };
 

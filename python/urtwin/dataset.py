@@ -365,9 +365,11 @@ def column_units():
 
 def run_one(s, rid, t, p, seed, out_dir):
     """Simulate one run and write DIR/runs/<rid>.parquet and .json (temp name, then rename).
-    Returns (rid, simulated seconds, loop wall seconds)."""
+    Returns (rid, simulated seconds, loop wall seconds, loop CPU seconds, the whole run's
+    wall and CPU seconds)."""
     import pyarrow.parquet as pq
 
+    wall0, cpu0 = time.perf_counter(), time.thread_time()
     runs = Path(out_dir) / "runs"
     m = model_for(s, p)
     tr = trajectory_for(m, t, seed, s["duration"])
@@ -400,7 +402,8 @@ def run_one(s, rid, t, p, seed, out_dir):
     tmp = runs / f".{rid}.json.tmp{os.getpid()}"
     tmp.write_text(json.dumps(side, indent=1, sort_keys=True) + "\n")
     os.replace(tmp, runs / f"{rid}.json")
-    return rid, float(r.t[-1]), float(r.info["wall_s"])
+    return (rid, float(r.t[-1]), float(r.info["wall_s"]), float(r.info["cpu_s"]),
+            time.perf_counter() - wall0, time.thread_time() - cpu0)
 
 
 def write_index(s, out_dir):
@@ -532,12 +535,26 @@ def main(argv=None):
     if failed:
         return 1
     write_index(s, out)
-    if stats and not a.quiet:
+    if stats:
         sim = sum(x[1] for x in stats)
-        loop = sum(x[2] for x in stats)
-        print(f"{len(stats)} runs ({total - len(todo)} already done), {sim:.3g} s simulated "
-              f"in {wall:.3g} s wall: {sim / wall:.3g} sim s per wall s overall, "
-              f"{sim / loop:.3g} per worker in the stepping loops")
+        summary = {
+            "runs": len(stats), "already_done": total - len(todo), "workers": a.workers,
+            "ray": not a.no_ray, "simulated_s": sim, "wall_s": wall,
+            "sim_per_wall": sim / wall,
+            "sim_per_loop_wall": sim / sum(x[2] for x in stats),
+            "sim_per_loop_cpu": sim / sum(x[3] for x in stats),
+            "sim_per_run_wall": sim / sum(x[4] for x in stats),
+            "sim_per_run_cpu": sim / sum(x[5] for x in stats),
+            "loadavg_1min": os.getloadavg()[0],
+        }
+        # timings change from run to run: beside the dataset, never in its files
+        (out / "last_sweep_timing.json").write_text(json.dumps(summary, indent=1) + "\n")
+        if not a.quiet:
+            print(f"{len(stats)} runs ({total - len(todo)} already done), {sim:.3g} s "
+                  f"simulated in {wall:.3g} s wall: {summary['sim_per_wall']:.3g} sim s per "
+                  f"wall s overall; per worker {summary['sim_per_run_wall']:.3g} per wall s "
+                  f"({summary['sim_per_run_cpu']:.3g} per CPU s) for whole runs, "
+                  f"{summary['sim_per_loop_cpu']:.3g} per CPU s in the stepping loops")
     return 0
 
 

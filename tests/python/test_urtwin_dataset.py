@@ -43,7 +43,9 @@ def sweep(*args, wait=True):
 
 
 def files(d):
-    return {p.relative_to(d): p.read_bytes() for p in sorted(Path(d).rglob("*")) if p.is_file()}
+    """The dataset's files (not last_sweep_timing.json, the wall-clock report beside it)."""
+    return {p.relative_to(d): p.read_bytes() for p in sorted(Path(d).rglob("*"))
+            if p.is_file() and p.name != "last_sweep_timing.json"}
 
 
 @pytest.fixture(scope="module")
