@@ -20,7 +20,7 @@ APT_PACKAGES := build-essential cmake pkg-config libeigen3-dev libsundials-dev l
   googletest
 
 .PHONY: all deps apt venv build build-asan build-tsan test test-unit test-asan test-tsan test-fuzz test-python bench run \
-  clean fuzz reference-compare plots urcl test-urcl urcl-report
+  clean fuzz reference-compare plots urcl test-urcl urcl-report dataset-demo
 
 all: build
 
@@ -169,6 +169,13 @@ reference-compare: build
 plots: build
 	build/tools/urt_sim --traj excitation --duration 10 --decimate 20 --out build/excitation.csv
 	$(PY) tools/plot_run.py build/excitation.csv --out build/plots
+
+# the demo dataset (tools/dataset_demo.yaml) on a local Ray, then the current signatures and the
+# baseline detector's table (tools/dataset_demo.py) in build/dataset-demo
+dataset-demo: build
+	$(PY) -m urtwin.dataset tools/dataset_demo.yaml --out build/dataset-demo/data --workers $(JOBS)
+	$(PY) tools/dataset_demo.py build/dataset-demo/data --sweep tools/dataset_demo.yaml \
+	  --out build/dataset-demo
 
 run: build
 	build/tools/urtwin --config config/ur5.yaml --bind 127.0.0.1

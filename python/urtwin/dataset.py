@@ -499,6 +499,9 @@ def main(argv=None):
     elif todo:
         # nothing leaves the machine: no usage report to Ray's servers
         os.environ["RAY_USAGE_STATS_ENABLED"] = "0"
+        # Ray starts its workers at nice 15; the runs are the sweep's work, not background
+        # (on a busy machine nice 15 gave them a fraction of a core)
+        os.environ.setdefault("RAY_worker_niceness", "0")
         import ray
 
         # the workers import this package from where this process found it
