@@ -125,7 +125,8 @@ def main(argv=None):
                 ax[j, 2 * c + 1].semilogy(f[1:], spec[1:] + 1e-12, lw=0.5)
         r0 = next(x for x in rows if x["trajectory"] == traj)
         for j in range(NJ):
-            ax[j, 2 * c].plot(r0["time"], r0["twin"][:, j], "k--", lw=0.7, label="healthy twin")
+            ax[j, 2 * c].plot(r0["time"], r0["twin"][:, j], "k--", lw=0.7,
+                             label=f"healthy twin of unit {r0['unit']}")
             ax[j, 2 * c].set_ylabel(f"J{j} [A]")
         ax[0, 2 * c].set_title(f"{traj}: measured current")
         ax[0, 2 * c + 1].set_title(f"{traj}: spectrum")

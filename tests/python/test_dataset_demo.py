@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """tools/dataset_demo.py on a tiny healthy dataset (four 0.6 s runs, in-process): the residual
-against the healthy twin is the sensor noise alone (the twin without noise has the same
-physics), the table has a row per trajectory and split, and the signature plot is written."""
+against the noise-free healthy twin is of the noise's order (the same motion and model), the
+table has a row per trajectory and split, and the signature plot is written."""
 
 import os
 import re
@@ -33,4 +33,8 @@ def test_demo_on_a_tiny_dataset(tmp_path):
     # the train runs set the threshold, so none of them is above 1.2 times it
     assert re.search(r"\| excitation \| train \| healthy \| - \| 0 / 2 \|", table), table
     assert re.search(r"\| excitation \| test \| healthy \| - \| [0-2] / 2 \|", table), table
+    # the twin follows the same motion: the thresholds are the noise's order (0.1–0.25 A here),
+    # where a twin of another excitation or payload would be amperes off
+    thr = [float(x) for x in re.search(r"threshold excitation \[A\]: (.*)", table)[1].split()]
+    assert len(thr) == 6 and all(0 < x < 0.5 for x in thr), thr
     assert (tmp_path / "demo" / "signatures.png").stat().st_size > 10000
