@@ -219,3 +219,31 @@ def test_threads_step_in_parallel():
         assert np.array_equal(a.data, b.data)
     print(f"two 0.5 s runs: in sequence {t_seq:.3f} s, in two threads {t_par:.3f} s "
           f"(speed-up {t_seq / t_par:.2f}x)")
+
+
+def test_a_python_thread_runs_while_the_c_loop_steps():
+    # the direct proof that the GIL is released: a pure-Python thread notes the time as it
+    # goes, and some of its notes fall inside the C call (more than the 5 ms switch interval
+    # from either end: with the GIL held it could not run there at all)
+    m = urtwin.Model(CONFIG)
+    tr = urtwin.excitation(m, 1)
+    notes, stop = [], [False]
+
+    def spin():
+        n = 0
+        while not stop[0]:
+            n += 1
+            if n % 1000 == 0:
+                notes.append(time.perf_counter())
+
+    th = threading.Thread(target=spin)
+    th.start()
+    time.sleep(0.05)
+    t0 = time.perf_counter()
+    urtwin._urtwin.run(m._m, tr, 1.0, 100, None)   # the C call alone, no Python around it
+    t1 = time.perf_counter()
+    stop[0] = True
+    th.join()
+    inside = [t for t in notes if t0 + 0.02 < t < t1 - 0.02]
+    assert t1 - t0 > 0.05 and inside, f"no progress of the Python thread in {t1 - t0:.3f} s"
+    print(f"the Python thread noted {len(inside)} times during the {t1 - t0:.3f} s C call")
