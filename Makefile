@@ -16,7 +16,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 APT_PACKAGES := build-essential cmake pkg-config libeigen3-dev libsundials-dev libcmocka-dev \
   libyaml-cpp-dev liblcm-dev liblcm-bin cyclonedds-dev cyclonedds-tools libcli11-dev \
-  python3 python3-venv python3-pip clang libclang-rt-14-dev libglib2.0-dev zlib1g-dev libexpat1-dev \
+  python3 python3-venv python3-pip python3-dev clang libclang-rt-14-dev libglib2.0-dev zlib1g-dev libexpat1-dev \
   googletest
 
 .PHONY: all deps apt venv build build-asan build-tsan test test-unit test-asan test-tsan test-fuzz test-python bench run \

@@ -344,11 +344,15 @@ def table_of(result):
     tcp = result["tcp"]
     for k in range(6):
         cols[f"tcp_pose_{k}"] = np.ascontiguousarray(tcp[:, k])
-    # labels: no fault is injected without fault injection in liburtwin, so every sample is
-    # healthy by construction (health index 1); the protective-stop bits as the run had them.
-    # Fault labels (fault_active_<class>, severity_<class>) join here with urt_faults_truth.
-    n = len(result)
-    cols["health_index"] = np.ones(n)
+    # labels: the run's fault truth channels when it has them (fault_active_<class>,
+    # severity_<class>, health_index: urt_faults_truth, once liburtwin has fault injection);
+    # without them no fault was injected and every sample is healthy by construction
+    truth = [c for c in result.keys()
+             if c.startswith(("fault_active_", "severity_")) or c == "health_index"]
+    for c in truth:
+        cols[c] = np.ascontiguousarray(result[c])
+    if "health_index" not in truth:
+        cols["health_index"] = np.ones(len(result))
     cols["protective_stop"] = result["pstop"].astype(np.uint32)
     return pa.table(cols)
 
