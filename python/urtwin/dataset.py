@@ -321,6 +321,17 @@ def config_hash(model):
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 
 
+def spec_hash(s, t, p, seed):
+    """What a run is made of (the sweep's settings, its trajectory, payload and seed), hashed:
+    a resumed sweep skips a finished run only when this matches its sidecar's."""
+    keep = {k: s[k] for k in ("config", "overlays", "overrides", "rate", "output_rate",
+                              "duration", "splits")}
+    keep["splits"] = {str(k): v for k, v in keep["splits"].items()}
+    doc = {"sweep": keep, "trajectory": t, "payload": p, "seed": seed,
+           "urtwin_version": urtwin.__version__}
+    return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
+
+
 def plan(s):
     """Every run of the sweep, in a fixed order: [(run_id, trajectory, payload, seed)]."""
     runs = []
@@ -400,6 +411,7 @@ def run_one(s, rid, t, p, seed, out_dir):
                    "overlays": [os.path.basename(o) for o in s["overlays"]],
                    "overrides": s["overrides"], "hash": config_hash(m)},
         "urtwin_version": urtwin.__version__,
+        "spec_hash": spec_hash(s, t, p, seed),
         "faults": [],
         "units": column_units(),
     }
@@ -479,6 +491,19 @@ def main(argv=None):
         return 2
 
     runs_dir = out / "runs"
+    try:
+        for rid, t, p, seed in plan(s):
+            f = runs_dir / f"{rid}.json"
+            if f.exists() and json.loads(f.read_text()).get("spec_hash") != \
+                    spec_hash(s, t, p, seed):
+                raise SweepError(f"{f}: a run of another sweep (its settings differ from "
+                                 f"{a.sweep}'s): use another --out")
+    except (OSError, ValueError) as e:
+        print(f"urtwin.dataset: {out}: cannot read a finished run: {e}", file=sys.stderr)
+        return 2
+    except SweepError as e:
+        print(f"urtwin.dataset: {e}", file=sys.stderr)
+        return 2
     runs_dir.mkdir(parents=True, exist_ok=True)
     for stale in runs_dir.glob(".*.tmp*"):   # what a killed run left
         stale.unlink()
@@ -514,7 +539,10 @@ def main(argv=None):
             [pkg_parent] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])
         init = dict(include_dashboard=False, log_to_driver=False, configure_logging=False)
         if a.address:
-            ray.init(address=a.address, **init)
+            # a cluster's workers were not started from this process: tell them where the
+            # package is
+            ray.init(address=a.address, runtime_env={"env_vars": {"PYTHONPATH": pkg_parent}},
+                     **init)
         else:
             ray.init(num_cpus=a.workers, _node_ip_address="127.0.0.1", **init)
         try:

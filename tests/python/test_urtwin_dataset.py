@@ -114,6 +114,18 @@ def test_killed_and_resumed_gives_the_same_bytes(sweep_file, serial, tmp_path):
     assert files(tmp_path) == files(serial)
 
 
+def test_resume_refuses_another_sweeps_runs(sweep_file, serial, tmp_path):
+    import shutil
+    shutil.copytree(serial, tmp_path / "d")
+    other = tmp_path / "other.yaml"
+    other.write_text(SWEEP.replace("duration: 0.2", "duration: 0.4"))
+    before = files(tmp_path / "d")
+    res = sweep(other, "--out", tmp_path / "d", "--no-ray")
+    assert res.returncode == 2
+    assert "a run of another sweep" in res.stderr
+    assert files(tmp_path / "d") == before
+
+
 def test_record_csv_trajectory(tmp_path):
     m = urtwin.Model(overrides={"sensors.noise": False})
     ref = urtwin.run(m, "excitation", traj_seed=4, duration=0.2, decimate=40)
