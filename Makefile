@@ -18,11 +18,11 @@ VENV := .venv
 PY := $(VENV)/bin/python
 APT_PACKAGES := build-essential cmake pkg-config libeigen3-dev libsundials-dev libcmocka-dev \
   libyaml-cpp-dev liblcm-dev liblcm-bin cyclonedds-dev cyclonedds-tools libcli11-dev \
-  python3 python3-venv python3-pip clang libclang-rt-14-dev libglib2.0-dev zlib1g-dev libexpat1-dev \
+  python3 python3-venv python3-pip python3-dev clang libclang-rt-14-dev libglib2.0-dev zlib1g-dev libexpat1-dev \
   googletest
 
 .PHONY: all deps apt venv build build-asan build-tsan test test-unit test-asan test-tsan test-fuzz test-python bench run \
-  clean fuzz reference-compare plots urcl test-urcl urcl-report
+  clean fuzz reference-compare plots urcl test-urcl urcl-report dataset-demo
 
 all: build
 
@@ -56,6 +56,9 @@ $(VENV)/.stamp: tools/requirements.txt
 build: deps
 	cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DURT_PYTHON=$(abspath $(PY)) >/dev/null
 	cmake --build build -j $(JOBS)
+	@# `import urtwin` from the venv: its site-packages gets this checkout's python/ (where the
+	@# build put the extension beside the package's sources)
+	echo "$(abspath python)" > "$$($(PY) -c 'import sysconfig; print(sysconfig.get_path("purelib"))')/urtwin-checkout.pth"
 
 # clang, because libFuzzer comes with it; no SUNDIALS (the reference is left to the release run)
 build-asan: deps
@@ -169,6 +172,13 @@ reference-compare: build
 plots: build
 	build/tools/urt_sim --traj excitation --duration 10 --decimate 20 --out build/excitation.csv
 	$(PY) tools/plot_run.py build/excitation.csv --out build/plots
+
+# the demo dataset (tools/dataset_demo.yaml) on a local Ray, then the current signatures and the
+# baseline detector's table (tools/dataset_demo.py) in build/dataset-demo
+dataset-demo: build
+	$(PY) -m urtwin.dataset tools/dataset_demo.yaml --out build/dataset-demo/data --workers $(JOBS)
+	$(PY) tools/dataset_demo.py build/dataset-demo/data --sweep tools/dataset_demo.yaml \
+	  --out build/dataset-demo
 
 run: build
 	mkdir -p build/controller_log
