@@ -160,8 +160,7 @@ long resident_kib() {
   return rss * (sysconf(_SC_PAGESIZE) / 1024);
 }
 
-// one line the tests parse: "urtwin: dds: ticks N lost N drive N/N lost N, write errors N,
-// commands received N accepted N invalid N refused N dropped N"
+// one line the tests parse (test_lcm.py: the inputs' counts)
 void print_lcm_stats(const urt_lcm_bridge_t* b) {
   urt_lcm_stats_t n;
   urt_lcm_bridge_get_stats(b, &n);
@@ -177,6 +176,8 @@ void print_lcm_stats(const urt_lcm_bridge_t* b) {
                (unsigned long long)n.io_rejected, (unsigned long long)n.io_dropped);
 }
 
+// one line the tests parse: "urtwin: dds: ticks N lost N drive N/N lost N, write errors N,
+// commands received N accepted N invalid N refused N dropped N"
 void print_dds_stats(const urt_dds_bridge_t* b) {
   urt_dds_stats_t d;
   urt_dds_bridge_get_stats(b, &d);

@@ -5,27 +5,10 @@ lines and safety events, with their controller times. Without --log-dir they are
 answered as if done. The support file is read back with Python's zipfile (its CRC-32 checked)."""
 
 import re
-import socket
 import time
 import zipfile
 
-from urtwin_proc import Emulator
-
-
-class Dashboard:
-    def __init__(self, host):
-        self.sock = socket.create_connection((host, 29999), timeout=2.0)
-        self.f = self.sock.makefile("rwb")
-        assert self.f.readline().startswith(b"Connected: Universal Robots Dashboard Server")
-
-    def ask(self, line):
-        self.f.write(line.encode() + b"\n")
-        self.f.flush()
-        return self.f.readline().decode().strip()
-
-    def close(self):
-        self.f.close()
-        self.sock.close()
+from urtwin_proc import Dashboard, Emulator
 
 
 def test_log_commands_write_the_controllers_log_into_the_log_folder(tmp_path):

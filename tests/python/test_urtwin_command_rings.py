@@ -11,7 +11,6 @@ counted. The last RTDE input pattern must be what 30003 shows at the end."""
 import json
 import os
 import re
-import socket
 import subprocess
 import sys
 import time
@@ -20,7 +19,7 @@ import pytest
 
 import built
 
-from urtwin_proc import URTWIN, Emulator, RtReader
+from urtwin_proc import URTWIN, Dashboard, Emulator, RtReader
 
 built.require(URTWIN)
 FLOOD = os.path.join(os.path.dirname(__file__), "rtde_input_client.py")
@@ -28,30 +27,6 @@ FLOOD = os.path.join(os.path.dirname(__file__), "rtde_input_client.py")
 # command, its answer, the robot mode it leads to
 CYCLE = [("power off", "Powering off", "POWER_OFF"), ("power on", "Powering on", "IDLE"),
          ("brake release", "Brake releasing", "RUNNING")]
-
-
-class Dashboard:
-    def __init__(self, host):
-        self.sock = socket.create_connection((host, 29999), timeout=2.0)
-        self.f = self.sock.makefile("rwb")
-        assert self.f.readline().startswith(b"Connected: Universal Robots Dashboard Server")
-
-    def ask(self, line):
-        self.f.write(line.encode() + b"\n")
-        self.f.flush()
-        return self.f.readline().decode().strip()
-
-    def wait_mode(self, mode, timeout=2.0):
-        t_end = time.monotonic() + timeout
-        while time.monotonic() < t_end:
-            if self.ask("robotmode") == f"Robotmode: {mode}":
-                return True
-            time.sleep(0.002)
-        return False
-
-    def close(self):
-        self.f.close()
-        self.sock.close()
 
 
 def test_rtde_input_flood_costs_the_dashboard_no_command():

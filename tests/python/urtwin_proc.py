@@ -240,3 +240,32 @@ def decode_robot_message(body):
         n = rest[0]
         msg.update(project=rest[1:1 + n].decode(), major=rest[1 + n], minor=rest[2 + n])
     return msg
+
+
+# ---- port 29999 ----
+
+class Dashboard:
+    """A dashboard client: one request line, one reply line."""
+
+    def __init__(self, host, port=29999, timeout=2.0):
+        self.sock = socket.create_connection((host, port), timeout=timeout)
+        self.f = self.sock.makefile("rwb")
+        assert self.f.readline().startswith(b"Connected: Universal Robots Dashboard Server")
+
+    def ask(self, line):
+        self.f.write(line.encode() + b"\n")
+        self.f.flush()
+        return self.f.readline().decode().strip()
+
+    def wait_mode(self, mode, timeout=2.0):
+        """Poll robotmode until it reads `mode`; False after `timeout` s."""
+        t_end = time.monotonic() + timeout
+        while time.monotonic() < t_end:
+            if self.ask("robotmode") == f"Robotmode: {mode}":
+                return True
+            time.sleep(0.002)
+        return False
+
+    def close(self):
+        self.f.close()
+        self.sock.close()
