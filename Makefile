@@ -67,8 +67,11 @@ build-asan: deps
 	cmake --build build-asan -j $(JOBS)
 
 # ThreadSanitizer over the code that shares data between threads: the seqlock, the command
-# rings and the physics loop with its readers (TSan and ASan exclude each other: a tree of its own)
-TSAN_TESTS := core/seqlock core/spsc_ring core/loop
+# rings and the physics loop with its readers, and the emulator's I/O, runner and physics threads
+# with URScript programs on the runner's coroutines (script_sched.c tells TSan each switch)
+# (TSan and ASan exclude each other: a tree of its own)
+TSAN_TESTS := core/seqlock core/spsc_ring core/loop net/urscript/script_sched \
+  net/server/emulator net/server/program_play net/server/port_script
 build-tsan: deps
 	CC=clang CXX=clang++ cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=Debug -DURT_TSAN=ON \
 	  -DURT_WITH_SUNDIALS=OFF -DURT_BUILD_TOOLS=OFF >/dev/null

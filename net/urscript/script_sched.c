@@ -48,6 +48,30 @@
 #define FINISH_SWITCH(save, bottom, size) ((void)(save), (void)(bottom), (void)(size))
 #endif
 
+// ThreadSanitizer follows the switches too (each coroutine is a fiber of its own), else it
+// would take one coroutine's stack accesses for another's and the runner thread's history
+// would be a mix of all of them
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define US_TSAN 1
+#endif
+#endif
+#if defined(__SANITIZE_THREAD__) && !defined(US_TSAN)
+#define US_TSAN 1
+#endif
+#ifdef US_TSAN
+#include <sanitizer/tsan_interface.h>
+#define TSAN_CURRENT() __tsan_get_current_fiber()
+#define TSAN_CREATE() __tsan_create_fiber(0)
+#define TSAN_DESTROY(f) __tsan_destroy_fiber(f)
+#define TSAN_SWITCH(f) __tsan_switch_to_fiber(f, 0)
+#else
+#define TSAN_CURRENT() NULL
+#define TSAN_CREATE() NULL
+#define TSAN_DESTROY(f) ((void)(f))
+#define TSAN_SWITCH(f) ((void)(f))
+#endif
+
 #define GUARD ((size_t)65536)     /* below each stack: a multiple of any page size */
 #define MAX_THREADS 64              /* live threads of one program (the body counts)        */
 #define FIBER_STACK (8u << 20)      /* reserved per thread; touched pages only are committed:
@@ -64,6 +88,7 @@ typedef struct us_thread {
   char *map;                /* the mapping: a guard page, then the stack                    */
   size_t map_size;
   void *fake;               /* ASan's fake-stack handle while suspended                     */
+  void *tsan;               /* TSan's fiber (NULL without TSan)                              */
   bool started, done, killed;
   bool parked;              /* yielded; runs again once the tick advances past parked_tick  */
   uint64_t parked_tick;
@@ -87,6 +112,7 @@ typedef struct us_sched {
   bool halted;
   ucontext_t ctx;           /* the scheduler (the runner thread's own stack)                 */
   void *fake;
+  void *tsan;               /* the runner thread's TSan fiber, set by each resume            */
   const void *stack_bottom;
   size_t stack_size;
 } us_sched;
@@ -104,6 +130,7 @@ static void fiber_entry(unsigned hi, unsigned lo) {
   t->done = true;
   // the last switch: NULL drops this coroutine's fake stack
   START_SWITCH(NULL, S->stack_bottom, S->stack_size);
+  TSAN_SWITCH(S->tsan);
   swapcontext(&t->ctx, &S->ctx);
   abort();  // a finished coroutine is never resumed
 }
@@ -118,9 +145,12 @@ static void resume(us_sched *S, us_thread *t) {
     uintptr_t p = (uintptr_t)t;
     makecontext(&t->ctx, (void (*)(void))fiber_entry, 2, (unsigned)(p >> 32),
                 (unsigned)(p & 0xffffffffu));
+    t->tsan = TSAN_CREATE();
   }
   t->parked = false;
+  S->tsan = TSAN_CURRENT();
   START_SWITCH(&S->fake, t->map + GUARD, t->map_size - GUARD);
+  TSAN_SWITCH(t->tsan);
   swapcontext(&S->ctx, &t->ctx);
   FINISH_SWITCH(S->fake, NULL, NULL);
   if (t->done && S->critical == t->id) {
@@ -144,6 +174,7 @@ int urt__us_yield(vm *V) {
   t->parked = true;
   t->parked_tick = S->tick;
   START_SWITCH(&t->fake, S->stack_bottom, S->stack_size);
+  TSAN_SWITCH(S->tsan);
   swapcontext(&t->ctx, &S->ctx);
   FINISH_SWITCH(t->fake, &S->stack_bottom, &S->stack_size);
   if (urt__us_unwinding(V)) {
@@ -162,6 +193,9 @@ static void thread_free(us_thread *t) {
   }
   if (t->map) {
     munmap(t->map, t->map_size);
+  }
+  if (t->tsan) {
+    TSAN_DESTROY(t->tsan);
   }
   urt__us_vm_free(t->V);
   free(t);

@@ -3,6 +3,9 @@
 #include "test_support.h"
 
 #include <stdio.h>
+#include <unistd.h>
+
+#include <stdio.h>
 #include <stdlib.h>
 
 const char *urt_test_path(const char *rel) {
@@ -67,3 +70,11 @@ long urt_test_malloc_count(void) { return count; }
 void urt_test_malloc_arm(int on) { (void)on; }
 long urt_test_malloc_count(void) { return -1; }
 #endif
+
+const char *urt_test_host(int block, int k) {
+  static char host[8][32];
+  static int next;
+  char *h = host[next++ % 8];
+  snprintf(h, sizeof host[0], "127.%d.%d.%d", block, (int)(getpid() % 250), k);
+  return h;
+}

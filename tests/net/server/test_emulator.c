@@ -19,7 +19,7 @@
 #include "urt/loop.h"
 #include "urt/net/emulator.h"
 
-static const char *kHost = "127.0.0.1";
+static const char *kHost;  // urt_test_host: one of this process, UR's own ports
 static int g_offset;
 
 static int connect_to(int port) {
@@ -75,8 +75,9 @@ static int setup(void **state) {
   if (urt_loop_create(f.m, &lc, NULL, &f.loop, err, sizeof err) != 0) {
     return -1;
   }
-  // a port offset of our own so parallel test runs do not collide
-  g_offset = 20000 + (getpid() % 500) * 20;
+  // an address of our own so parallel test runs do not collide (urt_test_host)
+  kHost = urt_test_host(1, 1);
+  g_offset = 0;
   urt_emulator_config_t ec = {.bind = kHost, .port_offset = g_offset};
   if (urt_version_parse("5.19", &ec.version) != 0 ||
       urt_emulator_create(f.loop, &ec, &f.emu, err, sizeof err) != 0) {
@@ -182,7 +183,7 @@ static int dashboard_greeted(int fd) {
 // new one gets in.
 static void test_emulator__clients_beyond_the_cap_are_closed(void **state) {
   fixture_t *f = *state;
-  int offset = g_offset - 10000;  // ports 39999…49993: clear of every fixture's 49999…59993
+  int offset = 100;  // beside the fixture's emulator on the same address
   urt_emulator_config_t ec = {.bind = kHost, .port_offset = offset, .max_clients = 2};
   assert_int_equal(urt_version_parse("5.19", &ec.version), 0);
   urt_emulator_t *emu = NULL;

@@ -24,7 +24,7 @@
 #include "urt/loop.h"
 #include "urt/net/emulator.h"
 
-static const char *kHost = "127.0.0.1";
+static const char *kHost;  // urt_test_host: one of this process, UR's own ports
 
 static double now_s(void) {
   struct timespec ts;
@@ -116,6 +116,7 @@ static const char kExternalControlUrp[] =
 
 static void test_program_play__fetch_is_off_the_io_thread_and_bounded(void **state) {
   (void)state;
+  kHost = urt_test_host(3, 1);  // an address of our own: parallel runs never collide
   char dir[] = "/tmp/urt_play_XXXXXX";
   assert_non_null(mkdtemp(dir));
   char path[256];
@@ -130,9 +131,9 @@ static void test_program_play__fetch_is_off_the_io_thread_and_bounded(void **sta
   urt_loop_t *loop = NULL;
   char err[256];
   assert_int_equal(urt_loop_create(m, &lc, NULL, &loop, err, sizeof err), 0);
-  int offset = 21000 + (getpid() % 500) * 20;
+  int offset = 0;
   urt_emulator_config_t ec = {.bind = kHost, .port_offset = offset, .programs_dir = dir,
-                              .external_control_host = "127.0.0.1",
+                              .external_control_host = kHost,
                               .external_control_port = t.port};
   assert_int_equal(urt_version_parse("5.19", &ec.version), 0);
   urt_emulator_t *emu = NULL;
@@ -205,6 +206,7 @@ static void *answer_main(void *arg) {
 // (it starts once the cancelled fetch has wound down), and the stopped one never runs
 static void test_program_play__stop_then_play_during_a_fetch(void **state) {
   (void)state;
+  kHost = urt_test_host(3, 2);
   char dir[] = "/tmp/urt_play_XXXXXX";
   assert_non_null(mkdtemp(dir));
   char path[256];
@@ -226,9 +228,9 @@ static void test_program_play__stop_then_play_during_a_fetch(void **state) {
   urt_loop_t *loop = NULL;
   char err[256];
   assert_int_equal(urt_loop_create(m, &lc, NULL, &loop, err, sizeof err), 0);
-  int offset = 22000 + (getpid() % 500) * 20;
+  int offset = 0;
   urt_emulator_config_t ec = {.bind = kHost, .port_offset = offset, .programs_dir = dir,
-                              .external_control_port = a.port};
+                              .external_control_host = kHost, .external_control_port = a.port};
   assert_int_equal(urt_version_parse("5.19", &ec.version), 0);
   urt_emulator_t *emu = NULL;
   if (urt_emulator_create(loop, &ec, &emu, err, sizeof err) != 0) fail_msg("%s", err);
@@ -293,7 +295,8 @@ static void test_program_play__non_loopback_external_control_host_refused(void *
   urt_loop_t *loop = NULL;
   char err[256];
   assert_int_equal(urt_loop_create(m, &lc, NULL, &loop, err, sizeof err), 0);
-  urt_emulator_config_t ec = {.bind = kHost, .port_offset = 21500 + (getpid() % 500) * 20,
+  kHost = urt_test_host(3, 3);
+  urt_emulator_config_t ec = {.bind = kHost, .port_offset = 0,
                               .external_control_host = "192.168.56.1"};
   assert_int_equal(urt_version_parse("5.19", &ec.version), 0);
   urt_emulator_t *emu = NULL;
