@@ -138,8 +138,13 @@ double joint_reduce(const JointW& w, const double* r, VecD& a_d, double* e_z) no
 void joint_backsub(const JointW& w, const double* r, const VecD& a_d, double e_z, double k_qd,
                    double* k) noexcept {
   if (w.engaged) {
+    // k may alias a_d and bd as far as the compiler knows, which kept this loop scalar; with
+    // the pointers declared apart it is vectorised (the same multiply-add per entry)
+    double* __restrict kd = k;
+    const double* __restrict ad = a_d.data();
+    const double* __restrict bd = w.tab->bd;
     for (int i = 0; i < URT_NXD; i++) {
-      k[i] = a_d[i] + w.tab->bd[i] * k_qd;
+      kd[i] = ad[i] + bd[i] * k_qd;
     }
   } else {
     for (int i = 0; i < URT_NXD; i++) {
