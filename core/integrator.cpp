@@ -53,7 +53,10 @@ void joint_w_init(const urt_model_t* m, int j, int kind, const JointAux& aux, do
   // A W that follows that sign while q̇ dithers around 0 alternates between two wrong
   // linearisations and pumps z at the Nyquist rate; near rest W takes the mean of both sides.
   const urt_friction_out_t& fr = aux.fr;
-  double blend = std::fmin(1.0, std::fabs(qd) / kStickSpeed);
+  // min(1, |q̇|/v) as a compare: std::fmin is a libm call here (its NaN rule: a NaN speed gives
+  // 1, as this does) and the only call left in the per-joint setup
+  double ratio = std::fabs(qd) / kStickSpeed;
+  double blend = ratio < 1.0 ? ratio : 1.0;
   double a_zqd = 1.0 - (1.0 - fr.ddz_dqd) * blend;
   w->a_zz = fr.ddz_dz;
   w->f_z = w->gh * a_zqd / (1.0 - w->gh * fr.ddz_dz);
