@@ -162,13 +162,18 @@ void joint_backsub(const JointW& w, const double* r, const VecD& a_d, double e_z
 // ∂f/∂t of the drive rows: the set-point moves (model.md §5.3a, detail i).
 void drive_ft(const JointW& w, const urt_command_t& c, int j, double s, double* ft) noexcept {
   double qd_set = c.qd[j] + c.qdd[j] * s;
-  for (int i = 0; i < URT_NXJ; i++) {
-    ft[i] = 0.0;
-  }
+  // each entry written once (the drive rows, or zero), the arm rows q, q̇, z zero
   if (w.engaged) {
     for (int i = 0; i < URT_NXD; i++) {
       ft[i] = w.tab->fq_set[i] * qd_set + w.tab->fqd_set[i] * c.qdd[j];
     }
+  } else {
+    for (int i = 0; i < URT_NXD; i++) {
+      ft[i] = 0.0;
+    }
+  }
+  for (int i = URT_NXD; i < URT_NXJ; i++) {
+    ft[i] = 0.0;
   }
 }
 
