@@ -54,7 +54,10 @@ void joint_w_init(const urt_model_t* m, int j, int kind, const JointAux& aux, do
   // A W that follows that sign while q̇ dithers around 0 alternates between two wrong
   // linearisations and pumps z at the Nyquist rate; near rest W takes the mean of both sides.
   const urt_friction_out_t& fr = aux.fr;
-  double blend = std::fmin(1.0, std::fabs(qd) / kStickSpeed);
+  // min(1, |q̇|/v) as a compare: std::fmin is a libm call here (its NaN rule: a NaN speed gives
+  // 1, as this does) and the only call left in the per-joint setup
+  double ratio = std::fabs(qd) / kStickSpeed;
+  double blend = ratio < 1.0 ? ratio : 1.0;
   double a_zqd = 1.0 - (1.0 - fr.ddz_dqd) * blend;
   w->a_zz = fr.ddz_dz;
   w->f_z = w->gh * a_zqd / (1.0 - w->gh * fr.ddz_dz);
@@ -139,8 +142,13 @@ double joint_reduce(const JointW& w, const double* r, VecD& a_d, double* e_z) no
 void joint_backsub(const JointW& w, const double* r, const VecD& a_d, double e_z, double k_qd,
                    double* k) noexcept {
   if (w.engaged) {
+    // k may alias a_d and bd as far as the compiler knows, which kept this loop scalar; with
+    // the pointers declared apart it is vectorised (the same multiply-add per entry)
+    double* __restrict kd = k;
+    const double* __restrict ad = a_d.data();
+    const double* __restrict bd = w.tab->bd;
     for (int i = 0; i < URT_NXD; i++) {
-      k[i] = a_d[i] + w.tab->bd[i] * k_qd;
+      kd[i] = ad[i] + bd[i] * k_qd;
     }
   } else {
     for (int i = 0; i < URT_NXD; i++) {
@@ -155,13 +163,18 @@ void joint_backsub(const JointW& w, const double* r, const VecD& a_d, double e_z
 // ∂f/∂t of the drive rows: the set-point moves (model.md §5.3a, detail i).
 void drive_ft(const JointW& w, const urt_command_t& c, int j, double s, double* ft) noexcept {
   double qd_set = c.qd[j] + c.qdd[j] * s;
-  for (int i = 0; i < URT_NXJ; i++) {
-    ft[i] = 0.0;
-  }
+  // each entry written once (the drive rows, or zero), the arm rows q, q̇, z zero
   if (w.engaged) {
     for (int i = 0; i < URT_NXD; i++) {
       ft[i] = w.tab->fq_set[i] * qd_set + w.tab->fqd_set[i] * c.qdd[j];
     }
+  } else {
+    for (int i = 0; i < URT_NXD; i++) {
+      ft[i] = 0.0;
+    }
+  }
+  for (int i = URT_NXD; i < URT_NXJ; i++) {
+    ft[i] = 0.0;
   }
 }
 
