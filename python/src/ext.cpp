@@ -300,6 +300,12 @@ NB_MODULE(_urtwin, mod) {
   mod.def("run", &run, "model"_a, "trajectory"_a, "duration"_a, "decimate"_a, "seed"_a.none(),
           "faults_file"_a.none() = nb::none(), "faults_yaml"_a.none() = nb::none(),
           "faults_name"_a = "faults");
+  mod.def("faults_check", [](const Model &m, nb::object file, nb::object yaml,
+                            const std::string &name) {
+    urt_fault_scenario_t sc;
+    load_faults(m, file, yaml, name, &sc);
+    return (int)sc.n;
+  }, "model"_a, "file"_a.none(), "yaml"_a.none(), "name"_a);
   mod.def("fault_classes", [] {
     nb::list out;
     for (int c = 0; c < urt_fault_class_count(); c++) out.append(urt_fault_class_name(c));
