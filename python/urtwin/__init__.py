@@ -36,6 +36,18 @@ FAULTS_AVAILABLE = True
 FAULT_CLASSES = list(_urtwin.fault_classes())
 
 
+def _fault_keys(x):
+    """PyYAML reads the YAML 1.1 booleans on/off as True/False, keys too: an intermittent
+    profile's `on:` and `off:` come back as True and False. Give them their names back (the
+    C loader reads the text, where they are plain keys)."""
+    if isinstance(x, dict):
+        return {({True: "on", False: "off"}[k] if isinstance(k, bool) else k): _fault_keys(v)
+                for k, v in x.items()}
+    if isinstance(x, list):
+        return [_fault_keys(v) for v in x]
+    return x
+
+
 def _fault_args(faults):
     """(file, yaml_text, name) for _urtwin.run from run()'s faults argument."""
     if faults is None:
@@ -50,6 +62,7 @@ def _fault_args(faults):
     if isinstance(faults, (list, tuple)):
         faults = {"faults": list(faults)}
     if isinstance(faults, dict):
+        faults = _fault_keys(faults)
         import yaml
         # dumped one key a line, so the parser's line numbers point into this text
         return None, yaml.safe_dump(faults, sort_keys=False, default_flow_style=False), \

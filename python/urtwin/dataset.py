@@ -304,7 +304,7 @@ def _fault_cases(spec, rel, err):
             if not Path(fname).is_file():
                 raise err("faults", f"{name}: {fname}: no such file")
         else:
-            specs = c["faults"]
+            specs = _fault_keys(c["faults"])
             if not isinstance(specs, list) or not all(isinstance(f, dict) for f in specs):
                 raise err("faults", f"{name}: faults: expected a list of fault specs")
         sev = c.get("severities")
@@ -323,7 +323,7 @@ def _fault_cases(spec, rel, err):
             raise err("faults", f"{name}: test_severities: expected values of severities")
         if fname is not None:
             # the override needs the specs: the file's own text, parsed as the loader will
-            specs = yaml.safe_load(Path(fname).read_text()).get("faults")
+            specs = _fault_keys(yaml.safe_load(Path(fname).read_text())).get("faults")
             if not isinstance(specs, list):
                 raise err("faults", f"{name}: {fname}: no faults list")
         for x in sev:
@@ -334,6 +334,9 @@ def _fault_cases(spec, rel, err):
     if len(set(keys)) != len(keys):
         raise err("faults", "fault case names (with their severities) must be distinct")
     return out
+
+
+_fault_keys = urtwin._fault_keys
 
 
 def case_id(case):
@@ -514,7 +517,8 @@ def run_one(s, rid, t, p, seed, case, out_dir):
         "fault_case": case["name"],
         "severity_override": case["severity"],
         "faults": case["specs"] if case["specs"] is not None else (
-            yaml.safe_load(Path(case["file"]).read_text())["faults"] if case["file"] else []),
+            _fault_keys(yaml.safe_load(Path(case["file"]).read_text()))["faults"]
+            if case["file"] else []),
         "faults_file": os.path.basename(case["file"]) if case["file"] else None,
         "units": column_units(),
     }
