@@ -185,21 +185,32 @@ faults:
               profile: {kind: step, onset: 0.1}}]
     severities: [0.1, 0.2]
     test_severities: [0.2]
+  - {name: pulses, file: pulses.yaml}
+"""
+PULSES = """\
+faults:
+  - class: current_offset
+    joint: 0
+    severity: 0.05
+    unit: A
+    profile: {kind: intermittent, onset: 0.02, on: 0.03, off: 0.05}
 """
 
 
 def test_faulted_sweep_labels_sidecars_and_unseen_severities(tmp_path):
     (tmp_path / "f.yaml").write_text(FAULT_SWEEP)
+    (tmp_path / "pulses.yaml").write_text(PULSES)
     res = sweep(tmp_path / "f.yaml", "--out", tmp_path / "out", "--no-ray")
     assert res.returncode == 0, res.stderr
     idx = {r["run_id"]: r for r in pq.read_table(tmp_path / "out" / "index.parquet").to_pylist()}
     assert sorted(idx) == sorted(f"still__none{c}__s{s}" for s in (1, 2)
-                                 for c in ("", "__demag_sev0.1", "__demag_sev0.2"))
+                                 for c in ("", "__demag_sev0.1", "__demag_sev0.2", "__pulses"))
     # by unit, except the held-out severity: test only, whatever the seed
     assert {k: r["split"] for k, r in idx.items()} == {
         "still__none__s1": "train", "still__none__s2": "test",
         "still__none__demag_sev0.1__s1": "train", "still__none__demag_sev0.1__s2": "test",
-        "still__none__demag_sev0.2__s1": "test", "still__none__demag_sev0.2__s2": "test"}
+        "still__none__demag_sev0.2__s1": "test", "still__none__demag_sev0.2__s2": "test",
+        "still__none__pulses__s1": "train", "still__none__pulses__s2": "test"}
     assert idx["still__none__demag_sev0.2__s1"]["fault_classes"] == "demagnetisation"
     assert idx["still__none__s1"]["fault_classes"] == ""
     assert idx["still__none__s1"]["faults"] == "[]"
@@ -216,6 +227,16 @@ def test_faulted_sweep_labels_sidecars_and_unseen_severities(tmp_path):
     assert np.allclose(t["health_index"].to_numpy(), np.where(on, 1 - 0.2 / 0.3, 1.0),
                        rtol=0, atol=1e-12)
     assert not t["fault_active_crack"].to_numpy().any()
+    # a scenario file run as is: its specs in the sidecar (on/off as the file spells them), the
+    # truth follows its on/off windows
+    side = json.loads((runs / "still__none__pulses__s1.json").read_text())
+    assert side["faults_file"] == "pulses.yaml" and side["severity_override"] is None
+    assert side["faults"][0]["profile"] == {"kind": "intermittent", "onset": 0.02, "on": 0.03,
+                                            "off": 0.05}
+    p = pq.read_table(runs / "still__none__pulses__s1.parquet")
+    ph = ((p["timestamp"].to_numpy() - 0.02) % 0.08 < 0.03 - 1e-9) & \
+        (p["timestamp"].to_numpy() >= 0.02 - 1e-12)
+    assert np.array_equal(p["fault_active_current_offset"].to_numpy() == 1.0, ph)
     h = pq.read_table(runs / "still__none__s1.parquet")
     assert h.column_names == t.column_names and np.all(h["health_index"].to_numpy() == 1.0)
     # the fault acts: the shoulder's current grows once the magnets weaken
