@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -21,6 +22,7 @@
 #include "run.hpp"
 #include "traj.h"
 #include "urt/core.h"
+#include "urt/faults.h"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -192,9 +194,29 @@ nb::dict read_record_csv(const std::string &path) {
   return out;
 }
 
+// A fault scenario from a file (urt_faults_load) or from YAML text (urt_faults_parse, with
+// name standing for the file in messages); a bad one raises ValueError "name:line: key: reason".
+void load_faults(const Model &model, nb::object file, nb::object yaml, const std::string &name,
+                 urt_fault_scenario_t *out) {
+  std::memset(out, 0, sizeof *out);
+  char err[512] = "";
+  int rc = 0;
+  if (!file.is_none()) {
+    rc = urt_faults_load(model.get(), nb::cast<std::string>(file).c_str(), out, err, sizeof err);
+  } else if (!yaml.is_none()) {
+    rc = urt_faults_parse(model.get(), nb::cast<std::string>(yaml).c_str(), name.c_str(), out,
+                          err, sizeof err);
+  }
+  if (rc != 0) {
+    throw std::invalid_argument(err[0] ? std::string(err) : std::string(urt_strerror(rc)));
+  }
+}
+
 nb::tuple run(const Model &model, const urtpy::Trajectory &tr, double duration, long decimate,
-              nb::object seed) {
+              nb::object seed, nb::object faults_file, nb::object faults_yaml,
+              const std::string &faults_name) {
   urtpy::RunSpec spec;
+  load_faults(model, faults_file, faults_yaml, faults_name, &spec.faults);
   spec.duration = duration;
   spec.decimate = decimate;
   if (!seed.is_none()) {
@@ -275,5 +297,18 @@ NB_MODULE(_urtwin, mod) {
     }
     return chans;
   });
-  mod.def("run", &run, "model"_a, "trajectory"_a, "duration"_a, "decimate"_a, "seed"_a.none());
+  mod.def("run", &run, "model"_a, "trajectory"_a, "duration"_a, "decimate"_a, "seed"_a.none(),
+          "faults_file"_a.none() = nb::none(), "faults_yaml"_a.none() = nb::none(),
+          "faults_name"_a = "faults");
+  mod.def("faults_check", [](const Model &m, nb::object file, nb::object yaml,
+                            const std::string &name) {
+    urt_fault_scenario_t sc;
+    load_faults(m, file, yaml, name, &sc);
+    return (int)sc.n;
+  }, "model"_a, "file"_a.none(), "yaml"_a.none(), "name"_a);
+  mod.def("fault_classes", [] {
+    nb::list out;
+    for (int c = 0; c < urt_fault_class_count(); c++) out.append(urt_fault_class_name(c));
+    return out;
+  });
 }

@@ -71,8 +71,35 @@ std::vector<Channel> make_channels() {
     out.push_back({d.name, off, d.width, d.unit, d.what});
     off += d.width;
   }
+  // the fault truth (urt_faults_truth), per class whether or not the run has faults, so that
+  // every run has the same columns; the names live as long as the process (channels() is static)
+  static std::vector<std::string> names;
+  const int nc = urt_fault_class_count();
+  names.reserve(2 * (size_t)nc);
+  for (int c = 0; c < nc; c++) {
+    names.push_back(std::string("fault_active_") + urt_fault_class_name(c));
+  }
+  for (int c = 0; c < nc; c++) {
+    names.push_back(std::string("severity_") + urt_fault_class_name(c));
+  }
+  for (int c = 0; c < nc; c++) {
+    out.push_back({names[(size_t)c].c_str(), off++, 1, "-",
+                   "1 if a fault of this class is active at this sample, else 0"});
+  }
+  for (int c = 0; c < nc; c++) {
+    // encoder classes mix units by component (rad, rad/s, ...): the spec's unit applies
+    out.push_back({names[(size_t)(nc + c)].c_str(), off++, 1, "class unit",
+                   "severity now of this class's active fault; of several active ones, the "
+                   "one with the largest |severity|; 0 when none is active"});
+  }
+  out.push_back({"health_index", off++, 1, "-",
+                 "1 - max over active faults of |severity| / the larger |bound| of the class's "
+                 "range (urt_fault_severity_range), clamped to [0, 1]; 1 when none is active"});
   return out;
 }
+
+// Where the truth columns start (after the physical channels).
+int truth_offset(const std::vector<Channel> &ch) { return ch[CH_COUNT].offset; }
 
 std::string pstop_text(uint32_t bits) {
   static const char *const names[] = {"non-finite command", "position limit", "speed limit",
@@ -129,6 +156,34 @@ void record(const urt_model_t *m, const urt_data_t &d, const double temp[URT_NJ]
   }
   std::memcpy(row + ch[CH_TCP].offset, d.tcp_pose, sizeof d.tcp_pose);
   row[ch[CH_PSTOP].offset] = (double)d.pstop;
+}
+
+// The truth columns of one sample. bound[k]: fault k's range bound (max(|lo|, |hi|)).
+void record_truth(const urt_model_t *m, const urt_data_t &d, const double *bound,
+                  const std::vector<Channel> &ch, double *row) {
+  const int nc = urt_fault_class_count();
+  double *active = row + truth_offset(ch), *sev = active + nc, *health = sev + nc;
+  std::fill(active, health + 1, 0.0);  // the row is zeroed already; a cheap guarantee
+  *health = 1.0;
+  urt_fault_truth_t tr;
+  urt_faults_truth(m, &d, &tr);
+  double worst = 0.0;
+  for (int k = 0; k < tr.n; k++) {
+    if (!tr.active[k]) {
+      continue;
+    }
+    const int c = tr.cls[k];
+    const double s = tr.severity[k];
+    // several active faults of one class (on several joints, say): the one of largest |s|
+    if (active[c] == 0.0 || std::fabs(s) > std::fabs(sev[c])) {
+      sev[c] = s;
+    }
+    active[c] = 1.0;
+    if (bound[k] > 0.0) {
+      worst = std::max(worst, std::fabs(s) / bound[k]);
+    }
+  }
+  *health = std::max(0.0, 1.0 - worst);
 }
 
 void thermal_step(const urt_model_t *m, const urt_data_t &d, double h, double temp[URT_NJ]) {
@@ -230,6 +285,17 @@ int run(const urt_model_t *m, const Trajectory &tr, const RunSpec &spec, RunOutp
     urt_sensors_sample(m, &d);
     urt_data_update_outputs(m, &d);
   }
+  rc = urt_data_set_faults(m, &d, &spec.faults);
+  if (rc != 0) {
+    out->error = std::string("faults: ") + urt_strerror(rc);
+    return 2;
+  }
+  double bound[URT_MAX_FAULTS] = {0};
+  for (int k = 0; k < spec.faults.n; k++) {
+    double lo, hi;
+    urt_fault_severity_range(m, &spec.faults.f[k], &lo, &hi);
+    bound[k] = std::max(std::fabs(lo), std::fabs(hi));
+  }
   double temp[URT_NJ];
   for (int j = 0; j < URT_NJ; j++) {
     temp[j] = m->thermal[j].t_amb;
@@ -255,7 +321,9 @@ int run(const urt_model_t *m, const Trajectory &tr, const RunSpec &spec, RunOutp
     }
     if (k % dec == 0 || k == nsteps) {
       urt_data_update_outputs(m, &d);
-      record(m, d, temp, ch, &out->data[out->rows * (size_t)out->row_width]);
+      double *row = &out->data[out->rows * (size_t)out->row_width];
+      record(m, d, temp, ch, row);
+      record_truth(m, d, bound, ch, row);
       out->rows++;
     }
     if (k == nsteps) {

@@ -13,6 +13,7 @@
 
 #include "traj.h"
 #include "urt/core.h"
+#include "urt/faults.h"
 
 namespace urtpy {
 
@@ -41,9 +42,9 @@ struct RunSpec {
   long decimate = 1;        // record every decimate-th step (and the last)
   bool has_seed = false;    // reseed the sensor noise (as simulation.seed = seed would)
   uint64_t seed = 0;
-  // Faults (issue 11 items 1–3) are wired here once core/include/urt/faults.h exists: the
-  // scenario is installed after urt_data_init and its truth is recorded per sample beside the
-  // channels below (fault_active_<class>, severity_<class>, health_index).
+  // The fault scenario (core/include/urt/faults.h; n = 0: none), installed after urt_data_init
+  // and the reseed, as urt_sim --faults does; its truth is recorded per sample (channels()).
+  urt_fault_scenario_t faults{};
 };
 
 // One recorded channel: columns [offset, offset + width) of each row.

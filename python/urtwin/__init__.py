@@ -23,13 +23,52 @@ from . import _urtwin
 __version__ = "0.1.0"
 __all__ = ["Model", "Trajectory", "Result", "run", "excitation", "pickplace", "hold",
            "from_arrays", "from_record_csv", "read_record_csv", "default_config",
-           "CHANNELS", "FAULTS_AVAILABLE"]
+           "CHANNELS", "FAULTS_AVAILABLE", "FAULT_CLASSES"]
 
 NJ = _urtwin.NJ
 Trajectory = _urtwin.Trajectory
 
-# core/include/urt/faults.h is not in this build's liburtwin yet: a run with faults is refused
-FAULTS_AVAILABLE = False
+# liburtwin has fault injection (core/include/urt/faults.h): run(..., faults=...) and the
+# dataset's faults axis
+FAULTS_AVAILABLE = True
+
+# the fault classes as scenario files spell them, in the order of the truth channels
+FAULT_CLASSES = list(_urtwin.fault_classes())
+
+
+def _fault_keys(x):
+    """PyYAML reads the YAML 1.1 booleans on/off as True/False, keys too: an intermittent
+    profile's `on:` and `off:` come back as True and False. Give them their names back (the
+    C loader reads the text, where they are plain keys)."""
+    if isinstance(x, dict):
+        return {({True: "on", False: "off"}[k] if isinstance(k, bool) else k): _fault_keys(v)
+                for k, v in x.items()}
+    if isinstance(x, list):
+        return [_fault_keys(v) for v in x]
+    return x
+
+
+def _fault_args(faults):
+    """(file, yaml_text, name) for _urtwin.run from run()'s faults argument."""
+    if faults is None:
+        return None, None, "faults"
+    if isinstance(faults, os.PathLike):
+        return os.fspath(faults), None, "faults"
+    if isinstance(faults, str):
+        # YAML text has a newline or starts with the document's key; anything else is a path
+        if "\n" in faults or faults.lstrip().startswith("faults:"):
+            return None, faults, "<faults>"
+        return faults, None, "faults"
+    if isinstance(faults, (list, tuple)):
+        faults = {"faults": list(faults)}
+    if isinstance(faults, dict):
+        faults = _fault_keys(faults)
+        import yaml
+        # dumped one key a line, so the parser's line numbers point into this text
+        return None, yaml.safe_dump(faults, sort_keys=False, default_flow_style=False), \
+            "<faults>"
+    raise TypeError("faults: expected a scenario file path, YAML text, a dict {faults: [...]} "
+                    "or a list of fault specs")
 
 
 def default_config():
@@ -214,12 +253,14 @@ def run(model, trajectory, duration=None, seed=None, rate=None, decimate=1, traj
     the end is held. seed: the sensor-noise seed (default the model's simulation.seed; the
     same as the override simulation.seed=SEED). rate [Hz]: the physics rate (the model is
     reloaded with it). decimate: record every Nth step and the last. faults: a fault
-    scenario (file path or YAML text) — refused until liburtwin has core/include/urt/faults.h.
+    scenario (core/include/urt/faults.h) as a file path, YAML text, a dict {"faults": [...]}
+    or a list of fault specs (dicts as the file spells them); installed at the start as
+    `urt_sim --faults` does, a bad one raises ValueError "file:line: key: reason" (for a dict
+    or list, "<faults>:line" of its YAML dump, yaml.safe_dump(..., sort_keys=False)). Every run
+    records the truth channels fault_active_<class>, severity_<class> and health_index
+    (CHANNELS says how they are formed), healthy runs too.
     The GIL is released while the run steps."""
-    if faults is not None:
-        if not FAULTS_AVAILABLE:
-            raise NotImplementedError("faults: not available in this build (liburtwin has no "
-                                      "fault injection yet: core/include/urt/faults.h)")
+    ffile, fyaml, fname = _fault_args(faults)
     if not isinstance(model, Model):
         raise TypeError("model: expected a urtwin.Model")
     if rate is not None:
@@ -244,7 +285,7 @@ def run(model, trajectory, duration=None, seed=None, rate=None, decimate=1, traj
     if duration is not None and not (np.isfinite(dur) and dur > 0):
         raise ValueError(f"duration: expected seconds > 0, got {duration!r}")
     data, chans, info = _urtwin.run(model._m, trajectory, dur, int(decimate),
-                                    None if seed is None else int(seed))
+                                    None if seed is None else int(seed), ffile, fyaml, fname)
     return Result(data, chans, info, model, trajectory)
 
 

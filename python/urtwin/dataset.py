@@ -33,9 +33,21 @@ The sweep file (every key but trajectories and seeds optional; unknown keys are 
     splits: {train: 0.6, val: 0.2, test: 0.2}   # by unit (seed), ../shared/docs/faults.md §2;
                                         # or explicit lists {train: [1, 2], test: [3]}
 
-A `faults` axis (scenarios × severities) is refused until liburtwin has fault injection
-(core/include/urt/faults.h). Exit status: 0 done, 1 a run failed, 2 a bad sweep file or options
-(nothing is written then).
+    faults:                             # default [healthy]: one fault case a run, per seed
+      - healthy                         #   no fault
+      - {name: stiff, file: stiff.yaml} #   a scenario file (core/include/urt/faults.h), as is
+      - name: demag                     #   or the scenario inline (its `faults:` list)
+        faults: [{class: demagnetisation, joint: 1, severity: 0.1, unit: "1",
+                  profile: {kind: step, onset: 1.0}}]
+        severities: [0.05, 0.1, 0.2]    #   one run per value, each replacing the severity of
+                                        #   every fault of the scenario
+        test_severities: [0.2]          #   these runs go to split "test" whatever their seed:
+                                        #   severities the other splits never see (faults.md §2)
+
+Every run's labels are the truth channels urtwin.run records (fault_active_<class>,
+severity_<class>, health_index); its sidecar holds the fault specs it ran (after the severity
+override). Exit status: 0 done, 1 a run failed, 2 a bad sweep file or options (nothing is
+written then).
 """
 
 import argparse
@@ -130,9 +142,6 @@ def load_sweep(path):
     for k in doc:
         if k not in KNOWN_KEYS:
             raise err(k, f"unknown key (known: {', '.join(sorted(KNOWN_KEYS))})")
-    if "faults" in doc:
-        raise err("faults", "not available in this build: liburtwin has no fault injection "
-                            "yet (core/include/urt/faults.h); sweep without a faults axis")
     base = path.resolve().parent
 
     def rel(p):
@@ -232,6 +241,7 @@ def load_sweep(path):
         raise err("seeds", "seeds must be distinct")
     s["seeds"] = seeds
     s["splits"] = _splits(doc.get("splits", {"train": 1.0}), seeds, err)
+    s["faults"] = _fault_cases(doc.get("faults", ["healthy"]), rel, err)
 
     # every model and every trajectory now, so that a bad one stops the sweep before it writes
     s["decimate"] = {}
@@ -251,6 +261,15 @@ def load_sweep(path):
             raise err("output_rate", f"the physics rate {1 / m.dt:g} Hz is not a whole "
                                      f"multiple of {s['output_rate']:g} Hz")
         s["decimate"][p["name"]] = int(round(ratio))
+        for case in s["faults"]:
+            try:
+                fault_yaml = scenario_yaml(case)
+                if case["specs"] is not None:
+                    urtwin._urtwin.faults_check(m._m, None, fault_yaml, f"<{case['name']}>")
+                elif case["file"] is not None:
+                    urtwin._urtwin.faults_check(m._m, case["file"], None, case["file"])
+            except ValueError as e:
+                raise err("faults", f"{case['name']} (payload {p['name']}): {e}") from None
         for t in s["trajectories"]:
             for seed in seeds if t["kind"] == "excitation" else seeds[:1]:
                 try:
@@ -259,6 +278,81 @@ def load_sweep(path):
                     raise err("trajectories", f"{t['name']} (payload {p['name']}, seed "
                                               f"{seed}): {e}") from None
     return s
+
+
+def _fault_cases(spec, rel, err):
+    """The faults axis: [{name, file, specs, severity, split}], one entry a run per seed. specs
+    is the scenario's list of fault dicts (None for a file run as is, or for healthy)."""
+    if not isinstance(spec, list) or not spec:
+        raise err("faults", "expected a non-empty list of healthy, {name, file} or "
+                            "{name, faults: [...]} (with severities, test_severities)")
+    out = []
+    for c in spec:
+        if c in ("healthy", None):
+            out.append({"name": "healthy", "file": None, "specs": None, "severity": None,
+                        "split": None})
+            continue
+        if not isinstance(c, dict) or "name" not in c or ("file" in c) == ("faults" in c):
+            raise err("faults", f"expected healthy or {{name, file | faults}}, got {c!r}")
+        unknown = set(c) - {"name", "file", "faults", "severities", "test_severities"}
+        if unknown:
+            raise err("faults", f"{c['name']}: unknown key {sorted(unknown)[0]!r}")
+        name = str(c["name"])
+        fname, specs = None, None
+        if "file" in c:
+            fname = str(rel(c["file"]))
+            if not Path(fname).is_file():
+                raise err("faults", f"{name}: {fname}: no such file")
+        else:
+            specs = _fault_keys(c["faults"])
+            if not isinstance(specs, list) or not all(isinstance(f, dict) for f in specs):
+                raise err("faults", f"{name}: faults: expected a list of fault specs")
+        sev = c.get("severities")
+        held = c.get("test_severities", [])
+        if sev is None:
+            if held:
+                raise err("faults", f"{name}: test_severities needs severities")
+            out.append({"name": name, "file": fname, "specs": specs, "severity": None,
+                        "split": None})
+            continue
+        if not isinstance(sev, list) or not sev or not all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+                for x in sev) or len(set(sev)) != len(sev):
+            raise err("faults", f"{name}: severities: expected a list of distinct numbers")
+        if not isinstance(held, list) or any(x not in sev for x in held):
+            raise err("faults", f"{name}: test_severities: expected values of severities")
+        if fname is not None:
+            # the override needs the specs: the file's own text, parsed as the loader will
+            specs = _fault_keys(yaml.safe_load(Path(fname).read_text())).get("faults")
+            if not isinstance(specs, list):
+                raise err("faults", f"{name}: {fname}: no faults list")
+        for x in sev:
+            out.append({"name": name, "file": fname,
+                        "specs": [dict(f, severity=float(x)) for f in specs],
+                        "severity": float(x), "split": "test" if x in held else None})
+    keys = [case_id(c) for c in out]
+    if len(set(keys)) != len(keys):
+        raise err("faults", "fault case names (with their severities) must be distinct")
+    return out
+
+
+_fault_keys = urtwin._fault_keys
+
+
+def case_id(case):
+    """The fault case's part of a run id: "" for healthy (a sweep without faults keeps its
+    ids), else __<name>[_sev<severity>]."""
+    if case["name"] == "healthy" and case["specs"] is None and case["file"] is None:
+        return ""
+    sev = "" if case["severity"] is None else f"_sev{case['severity']:g}"
+    return f"__{_sanitize(case['name'])}{sev}"
+
+
+def scenario_yaml(case):
+    """The YAML text urtwin.run parses for an inline (or severity-overridden) case, else None."""
+    if case["specs"] is None:
+        return None
+    return yaml.safe_dump({"faults": case["specs"]}, sort_keys=False, default_flow_style=False)
 
 
 def _splits(spec, seeds, err):
@@ -321,7 +415,7 @@ def config_hash(model):
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 
 
-def spec_hash(s, t, p, seed):
+def spec_hash(s, t, p, seed, case):
     """What a run is made of (the sweep's settings, its trajectory, payload and seed), hashed:
     a resumed sweep skips a finished run only when this matches its sidecar's."""
     keep = {k: s[k] for k in ("config", "overlays", "overrides", "rate", "output_rate",
@@ -329,17 +423,24 @@ def spec_hash(s, t, p, seed):
     keep["splits"] = {str(k): v for k, v in keep["splits"].items()}
     doc = {"sweep": keep, "trajectory": t, "payload": p, "seed": seed,
            "urtwin_version": urtwin.__version__}
+    if case_id(case):
+        # a healthy run's hash stays what it was before the faults axis
+        doc["faults"] = {"case": case, "file_sha256": hashlib.sha256(
+            Path(case["file"]).read_bytes()).hexdigest() if case["file"] else None}
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
 
 
 def plan(s):
-    """Every run of the sweep, in a fixed order: [(run_id, trajectory, payload, seed)]."""
+    """Every run of the sweep, in a fixed order: [(run_id, trajectory, payload, seed, fault
+    case)]."""
     runs = []
     for t in s["trajectories"]:
         for p in s["payloads"]:
-            for seed in s["seeds"]:
-                rid = f"{_sanitize(t['name'])}__{_sanitize(p['name'])}__s{seed}"
-                runs.append((rid, t, p, seed))
+            for case in s["faults"]:
+                for seed in s["seeds"]:
+                    rid = f"{_sanitize(t['name'])}__{_sanitize(p['name'])}{case_id(case)}" \
+                          f"__s{seed}"
+                    runs.append((rid, t, p, seed, case))
     return runs
 
 
@@ -355,9 +456,8 @@ def table_of(result):
     tcp = result["tcp"]
     for k in range(6):
         cols[f"tcp_pose_{k}"] = np.ascontiguousarray(tcp[:, k])
-    # labels: the run's fault truth channels when it has them (fault_active_<class>,
-    # severity_<class>, health_index: urt_faults_truth, once liburtwin has fault injection);
-    # without them no fault was injected and every sample is healthy by construction
+    # labels: the run's fault truth channels (fault_active_<class>, severity_<class>,
+    # health_index: urt_faults_truth, python/src/run.cpp); every run records them
     truth = [c for c in result.keys()
              if c.startswith(("fault_active_", "severity_")) or c == "health_index"]
     for c in truth:
@@ -378,7 +478,7 @@ def column_units():
     return out
 
 
-def run_one(s, rid, t, p, seed, out_dir):
+def run_one(s, rid, t, p, seed, case, out_dir):
     """Simulate one run and write DIR/runs/<rid>.parquet and .json (temp name, then rename).
     Returns (rid, simulated seconds, loop wall seconds, loop CPU seconds, the whole run's
     wall and CPU seconds)."""
@@ -388,7 +488,9 @@ def run_one(s, rid, t, p, seed, out_dir):
     runs = Path(out_dir) / "runs"
     m = model_for(s, p)
     tr = trajectory_for(m, t, seed, s["duration"])
-    r = urtwin.run(m, tr, duration=s["duration"], seed=seed, decimate=s["decimate"][p["name"]])
+    faults = scenario_yaml(case) or case["file"]
+    r = urtwin.run(m, tr, duration=s["duration"], seed=seed, decimate=s["decimate"][p["name"]],
+                   faults=faults)
     table = table_of(r)
     tmp = runs / f".{rid}.parquet.tmp{os.getpid()}"
     pq.write_table(table, tmp, compression="zstd")
@@ -398,7 +500,7 @@ def run_one(s, rid, t, p, seed, out_dir):
         "file": f"runs/{rid}.parquet",
         "seed": seed,
         "unit": seed,
-        "split": s["splits"][seed],
+        "split": case["split"] or s["splits"][seed],
         "trajectory": {k: v for k, v in t.items() if k != "csv"} | (
             {"csv": os.path.basename(t["csv"])} if "csv" in t else {}),
         "payload": p,
@@ -411,8 +513,13 @@ def run_one(s, rid, t, p, seed, out_dir):
                    "overlays": [os.path.basename(o) for o in s["overlays"]],
                    "overrides": s["overrides"], "hash": config_hash(m)},
         "urtwin_version": urtwin.__version__,
-        "spec_hash": spec_hash(s, t, p, seed),
-        "faults": [],
+        "spec_hash": spec_hash(s, t, p, seed, case),
+        "fault_case": case["name"],
+        "severity_override": case["severity"],
+        "faults": case["specs"] if case["specs"] is not None else (
+            _fault_keys(yaml.safe_load(Path(case["file"]).read_text()))["faults"]
+            if case["file"] else []),
+        "faults_file": os.path.basename(case["file"]) if case["file"] else None,
         "units": column_units(),
     }
     tmp = runs / f".{rid}.json.tmp{os.getpid()}"
@@ -427,7 +534,7 @@ def write_index(s, out_dir):
     import pyarrow.parquet as pq
 
     rows = []
-    for rid, _, _, _ in plan(s):
+    for rid, *_ in plan(s):
         side = json.loads((Path(out_dir) / "runs" / f"{rid}.json").read_text())
         rows.append({
             "run_id": rid, "file": side["file"], "split": side["split"],
@@ -438,7 +545,10 @@ def write_index(s, out_dir):
             "duration": side["duration"], "rate": side["rate"],
             "output_rate": side["output_rate"], "rows": side["rows"],
             "config_hash": side["config"]["hash"], "urtwin_version": side["urtwin_version"],
-            "faults": json.dumps(side["faults"]),
+            "fault_case": side["fault_case"],
+            "severity_override": side["severity_override"],
+            "fault_classes": ",".join(sorted({f["class"] for f in side["faults"]})),
+            "faults": json.dumps(side["faults"], sort_keys=True),
         })
     table = pa.Table.from_pylist(rows)
     tmp = Path(out_dir) / f".index.parquet.tmp{os.getpid()}"
@@ -492,10 +602,10 @@ def main(argv=None):
 
     runs_dir = out / "runs"
     try:
-        for rid, t, p, seed in plan(s):
+        for rid, t, p, seed, case in plan(s):
             f = runs_dir / f"{rid}.json"
             if f.exists() and json.loads(f.read_text()).get("spec_hash") != \
-                    spec_hash(s, t, p, seed):
+                    spec_hash(s, t, p, seed, case):
                 raise SweepError(f"{f}: a run of another sweep (its settings differ from "
                                  f"{a.sweep}'s): use another --out")
     except (OSError, ValueError) as e:
@@ -519,9 +629,9 @@ def main(argv=None):
     stats, failed = [], []
     wall0 = time.perf_counter()
     if a.no_ray:
-        for rid, t, p, seed in todo:
+        for rid, t, p, seed, case in todo:
             try:
-                stats.append(run_one(s, rid, t, p, seed, out))
+                stats.append(run_one(s, rid, t, p, seed, case, out))
             except (RuntimeError, ValueError) as e:
                 failed.append((rid, str(e)))
             bar.update(1)
@@ -550,8 +660,8 @@ def main(argv=None):
             pending, queue = {}, list(todo)
             while queue or pending:
                 while queue and len(pending) < a.workers:
-                    rid, t, p, seed = queue.pop(0)
-                    pending[task.remote(s, rid, t, p, seed, str(out.resolve()))] = rid
+                    rid, t, p, seed, case = queue.pop(0)
+                    pending[task.remote(s, rid, t, p, seed, case, str(out.resolve()))] = rid
                 done, _ = ray.wait(list(pending), num_returns=1)
                 for ref in done:
                     rid = pending.pop(ref)

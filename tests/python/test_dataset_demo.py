@@ -1,7 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """tools/dataset_demo.py on a tiny healthy dataset (four 0.6 s runs, in-process): the residual
 against the noise-free healthy twin is of the noise's order (the same motion and model), the
-table has a row per trajectory and split, and the signature plot is written."""
+table has a row per trajectory and split, and the signature plot is written. And on a tiny
+faulted one (four 0.6 s runs): a current-sensor offset far above the noise is detected in both
+splits, and the per-class signature plot is written."""
 
 import os
 import re
@@ -38,3 +40,28 @@ def test_demo_on_a_tiny_dataset(tmp_path):
     thr = [float(x) for x in re.search(r"threshold excitation \[A\]: (.*)", table)[1].split()]
     assert len(thr) == 6 and all(0 < x < 0.5 for x in thr), thr
     assert (tmp_path / "demo" / "signatures.png").stat().st_size > 10000
+
+
+def test_demo_on_a_tiny_faulted_dataset(tmp_path):
+    # two units, healthy and a current-sensor offset of 0.5 A on the shoulder (the catalogue's
+    # 5 % of i_max): the residual is the offset itself, several times the noise's thresholds
+    (tmp_path / "s.yaml").write_text(
+        "duration: 0.6\ntrajectories: [excitation]\nseeds: [1, 2]\n"
+        "splits: {train: [1], test: [2]}\nfaults:\n  - healthy\n"
+        "  - {name: current_offset, faults: [{class: current_offset, joint: 1, severity: 0.5,"
+        " unit: A, profile: {kind: step, onset: 0.0}}], severities: [0.5]}\n")
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "python"))
+    res = subprocess.run([sys.executable, "-m", "urtwin.dataset", tmp_path / "s.yaml", "--out",
+                          tmp_path / "data", "--no-ray", "--quiet"], env=env,
+                         capture_output=True, text=True, check=False, timeout=300)
+    assert res.returncode == 0, res.stderr
+    res = subprocess.run([sys.executable, ROOT / "tools" / "dataset_demo.py", tmp_path / "data",
+                          "--sweep", tmp_path / "s.yaml", "--out", tmp_path / "demo"], env=env,
+                         capture_output=True, text=True, check=False, timeout=300)
+    assert res.returncode == 0, res.stderr
+    table = (tmp_path / "demo" / "detector.md").read_text()
+    assert re.search(r"\| excitation \| train \| healthy \| - \| 0 / 1 \|", table), table
+    for split in ("train", "test"):
+        assert re.search(rf"\| excitation \| {split} \| current_offset \| 0\.5 \| 1 / 1 \|",
+                         table), table
+    assert (tmp_path / "demo" / "faults.png").stat().st_size > 10000

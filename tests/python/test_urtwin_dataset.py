@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """python -m urtwin.dataset: one tiny sweep (six 0.2 s runs) in this process, on a local Ray
 with two workers, and killed after its first run then resumed; all three give the same bytes.
+A tiny faulted sweep (six 0.2 s holds): labels from the truth, sidecars, unseen severities.
 The files' columns and labels, the index and its splits by unit, a record.py CSV as a
 trajectory, and bad sweeps refused with exit 2 and nothing written."""
 
@@ -147,7 +148,13 @@ def test_record_csv_trajectory(tmp_path):
     ("seeds: [1]\ntrajectories: [{name: r, csv: missing.csv}]\n", [],
      r"s\.yaml:2: trajectories: r: .*missing\.csv: no such file"),
     ("trajectories: [hold]\nseeds: [1]\nfaults: [{class: backlash}]\n", [],
-     r"s\.yaml:3: faults: not available in this build"),
+     r"s\.yaml:3: faults: expected healthy or \{name, file \| faults\}"),
+    ("trajectories: [hold]\nseeds: [1]\nfaults: [{name: d, faults: [{class: demagnetisation, "
+     "joint: 1, severity: 0.1, unit: '1', profile: {kind: step, onset: 0}}], "
+     "severities: [0.1, 0.5]}]\n", [],
+     r"s\.yaml:3: faults: d \(payload none\): <d>:\d+: faults\[0\]\.severity: must be in"),
+    ("trajectories: [hold]\nseeds: [1]\nfaults: [{name: d, file: nofile.yaml}]\n", [],
+     r"s\.yaml:3: faults: d: .*nofile\.yaml: no such file"),
     ("trajectories: [hold]\nseeds: [1]\noutput_rate: 700\n", [],
      r"output_rate: the physics rate 20000 Hz is not a whole multiple of 700 Hz"),
     ("trajectories: [hold]\nseeds: [1]\noverrides: {sensors.nosie: false}\n", [],
@@ -162,3 +169,76 @@ def test_bad_sweeps_write_nothing(tmp_path, text, args, message):
     import re
     assert re.search(message, res.stderr), res.stderr
     assert not (tmp_path / "out").exists()
+
+
+FAULT_SWEEP = """\
+sweep: faulty
+duration: 0.2
+overrides: {sensors.noise: false}
+trajectories: [{name: still, kind: hold}]
+seeds: [1, 2]
+splits: {train: [1], test: [2]}
+faults:
+  - healthy
+  - name: demag
+    faults: [{class: demagnetisation, joint: 1, severity: 0.1, unit: "1",
+              profile: {kind: step, onset: 0.1}}]
+    severities: [0.1, 0.2]
+    test_severities: [0.2]
+  - {name: pulses, file: pulses.yaml}
+"""
+PULSES = """\
+faults:
+  - class: current_offset
+    joint: 0
+    severity: 0.05
+    unit: A
+    profile: {kind: intermittent, onset: 0.02, on: 0.03, off: 0.05}
+"""
+
+
+def test_faulted_sweep_labels_sidecars_and_unseen_severities(tmp_path):
+    (tmp_path / "f.yaml").write_text(FAULT_SWEEP)
+    (tmp_path / "pulses.yaml").write_text(PULSES)
+    res = sweep(tmp_path / "f.yaml", "--out", tmp_path / "out", "--no-ray")
+    assert res.returncode == 0, res.stderr
+    idx = {r["run_id"]: r for r in pq.read_table(tmp_path / "out" / "index.parquet").to_pylist()}
+    assert sorted(idx) == sorted(f"still__none{c}__s{s}" for s in (1, 2)
+                                 for c in ("", "__demag_sev0.1", "__demag_sev0.2", "__pulses"))
+    # by unit, except the held-out severity: test only, whatever the seed
+    assert {k: r["split"] for k, r in idx.items()} == {
+        "still__none__s1": "train", "still__none__s2": "test",
+        "still__none__demag_sev0.1__s1": "train", "still__none__demag_sev0.1__s2": "test",
+        "still__none__demag_sev0.2__s1": "test", "still__none__demag_sev0.2__s2": "test",
+        "still__none__pulses__s1": "train", "still__none__pulses__s2": "test"}
+    assert idx["still__none__demag_sev0.2__s1"]["fault_classes"] == "demagnetisation"
+    assert idx["still__none__s1"]["fault_classes"] == ""
+    assert idx["still__none__s1"]["faults"] == "[]"
+    runs = tmp_path / "out" / "runs"
+    side = json.loads((runs / "still__none__demag_sev0.2__s1.json").read_text())
+    assert side["severity_override"] == 0.2 and side["fault_case"] == "demag"
+    assert side["faults"][0]["severity"] == 0.2 and side["faults"][0]["joint"] == 1
+    t = pq.read_table(runs / "still__none__demag_sev0.2__s1.parquet")
+    ts = t["timestamp"].to_numpy()
+    on = ts >= 0.1 - 1e-12
+    assert np.array_equal(t["fault_active_demagnetisation"].to_numpy(), on.astype(float))
+    assert np.array_equal(t["severity_demagnetisation"].to_numpy(), np.where(on, 0.2, 0.0))
+    # demagnetisation's range is [0, 0.3]: health 1 - 0.2 / 0.3 once it is on
+    assert np.allclose(t["health_index"].to_numpy(), np.where(on, 1 - 0.2 / 0.3, 1.0),
+                       rtol=0, atol=1e-12)
+    assert not t["fault_active_crack"].to_numpy().any()
+    # a scenario file run as is: its specs in the sidecar (on/off as the file spells them), the
+    # truth follows its on/off windows
+    side = json.loads((runs / "still__none__pulses__s1.json").read_text())
+    assert side["faults_file"] == "pulses.yaml" and side["severity_override"] is None
+    assert side["faults"][0]["profile"] == {"kind": "intermittent", "onset": 0.02, "on": 0.03,
+                                            "off": 0.05}
+    p = pq.read_table(runs / "still__none__pulses__s1.parquet")
+    ph = ((p["timestamp"].to_numpy() - 0.02) % 0.08 < 0.03 - 1e-9) & \
+        (p["timestamp"].to_numpy() >= 0.02 - 1e-12)
+    assert np.array_equal(p["fault_active_current_offset"].to_numpy() == 1.0, ph)
+    h = pq.read_table(runs / "still__none__s1.parquet")
+    assert h.column_names == t.column_names and np.all(h["health_index"].to_numpy() == 1.0)
+    # the fault acts: the shoulder's current grows once the magnets weaken
+    assert not np.array_equal(h["actual_current_1"].to_numpy()[on],
+                              t["actual_current_1"].to_numpy()[on])
