@@ -19,7 +19,7 @@ PY := $(VENV)/bin/python
 APT_PACKAGES := build-essential cmake pkg-config libeigen3-dev libsundials-dev libcmocka-dev \
   libyaml-cpp-dev liblcm-dev liblcm-bin cyclonedds-dev cyclonedds-tools libcli11-dev \
   python3 python3-venv python3-pip python3-dev clang libclang-rt-14-dev libglib2.0-dev zlib1g-dev libexpat1-dev \
-  googletest
+  googletest iproute2 util-linux
 
 .PHONY: all deps apt venv build build-asan build-tsan test test-unit test-asan test-tsan test-fuzz test-python bench run \
   clean fuzz reference-compare plots urcl test-urcl urcl-report dataset-demo
@@ -178,8 +178,9 @@ plots: build
 
 # the demo dataset (tools/dataset_demo.yaml) on a local Ray, then the current signatures and the
 # baseline detector's table (tools/dataset_demo.py) in build/dataset-demo
+# the local Ray runs in a network namespace with only the loopback: it listens on every interface
 dataset-demo: build
-	$(PY) -m urtwin.dataset tools/dataset_demo.yaml --out build/dataset-demo/data --workers $(JOBS)
+	tools/loopback_only.sh $(PY) -m urtwin.dataset tools/dataset_demo.yaml --out build/dataset-demo/data --workers $(JOBS)
 	$(PY) tools/dataset_demo.py build/dataset-demo/data --sweep tools/dataset_demo.yaml \
 	  --out build/dataset-demo
 

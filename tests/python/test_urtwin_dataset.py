@@ -33,9 +33,11 @@ splits: {train: [1, 2], test: [3]}
 """
 
 
-def sweep(*args, wait=True):
+def sweep(*args, wait=True, loopback_only=False):
     env = dict(os.environ, PYTHONPATH=str(ROOT / "python"))
     cmd = [sys.executable, "-m", "urtwin.dataset", *map(str, args)]
+    if loopback_only:
+        cmd = [str(ROOT / "tools" / "loopback_only.sh"), *cmd]
     if not wait:
         return subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 text=True)
@@ -90,7 +92,10 @@ def test_files_columns_and_labels(serial):
 
 
 def test_ray_gives_the_same_bytes(sweep_file, serial, tmp_path):
-    res = sweep(sweep_file, "--out", tmp_path, "--workers", "2")
+    # a local Ray listens on every interface (its GCS, raylet and workers): the sweep runs in a
+    # network namespace with only the loopback (tools/loopback_only.sh), so the test keeps to
+    # this machine whatever Ray binds
+    res = sweep(sweep_file, "--out", tmp_path, "--workers", "2", loopback_only=True)
     assert res.returncode == 0, res.stderr
     assert files(tmp_path) == files(serial)
 
