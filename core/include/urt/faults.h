@@ -12,7 +12,7 @@
  *
  * The integrator's W tables stay the healthy model's: ROS2 is a W-method, second order with
  * any W, and the faults only soften (stiffness loss, sag) or change non-stiff terms; the fixed
- * step is checked against CVODE with faults in tests/reference/test_reference_faults.c.
+ * step is checked against CVODE with three faults in tests/reference/test_reference.c.
  */
 #ifndef URT_FAULTS_H
 #define URT_FAULTS_H
