@@ -49,6 +49,9 @@ constexpr ClassInfo kClasses[URT_FAULT_NCLASSES] = {
     {"collision", "N", nullptr, 0.0, 500.0, 0, 0},
     // d ramps to fracture [S,3]: up to a 90 % local stiffness dip [P]
     {"crack", "1", nullptr, 0.0, 0.9, 0, 0},
+    // a lost or unexpected load: up to the UR5's rated 5 kg [P]; the catalogue's can and axis
+    // weights are 0.1–0.5 kg [S,19]
+    {"payload", "kg", nullptr, 0.0, 5.0, 0, 0},
 };
 
 constexpr const char* kProfiles[] = {"step", "linear", "exp", "intermittent", "random_walk"};
@@ -140,7 +143,8 @@ extern "C" const char* urt_fault_spec_invalid(const urt_model_t* m, const urt_fa
   if (f->cls < 0 || f->cls >= URT_FAULT_NCLASSES) {
     return "unknown fault class";
   }
-  if (f->cls != URT_FAULT_COLLISION && (f->joint < 0 || f->joint >= URT_NJ)) {
+  const bool at_tcp = f->cls == URT_FAULT_COLLISION || f->cls == URT_FAULT_PAYLOAD;
+  if (!at_tcp && (f->joint < 0 || f->joint >= URT_NJ)) {
     return "joint must be 0..5";
   }
   if (is_encoder(f->cls) ? (f->component != URT_FAULT_ENC_JOINT &&
@@ -174,6 +178,13 @@ extern "C" const char* urt_fault_spec_invalid(const urt_model_t* m, const urt_fa
       break;
     default:
       return "unknown profile";
+  }
+  if (f->cls == URT_FAULT_PAYLOAD) {
+    for (int i = 0; i < 3; i++) {
+      if (!(std::fabs(f->offset[i]) <= URT_PAYLOAD_COG_MAX)) {
+        return "payload offset must be within 1 m of the flange on each axis";
+      }
+    }
   }
   if (f->cls == URT_FAULT_COLLISION) {
     const double* u = f->direction;
@@ -221,7 +232,7 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
   // the joints any fault targets get the model's parameters back, then every fault's effect
   uint32_t mask = 0;
   for (int k = 0; k < n; k++) {
-    if (fs.s.f[k].cls != URT_FAULT_COLLISION) {
+    if (fs.s.f[k].cls != URT_FAULT_COLLISION && fs.s.f[k].cls != URT_FAULT_PAYLOAD) {
       mask |= 1u << fs.s.f[k].joint;
     }
   }
@@ -232,6 +243,10 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
   }
   for (int i = 0; i < 6; i++) {
     fs.wrench[i] = 0.0;
+  }
+  fs.payload_mass = 0.0;
+  for (int i = 0; i < 3; i++) {
+    fs.payload_moment[i] = 0.0;
   }
   double fr_scale[URT_NJ], drag[URT_NJ];
   for (int j = 0; j < URT_NJ; j++) {
@@ -256,7 +271,8 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
       fs.onset_time[k] = t;
     }
     const int j = f.joint;
-    urt_fault_joint_t* e = f.cls == URT_FAULT_COLLISION ? nullptr : &fs.joint[j];
+    urt_fault_joint_t* e =
+        f.cls == URT_FAULT_COLLISION || f.cls == URT_FAULT_PAYLOAD ? nullptr : &fs.joint[j];
     const bool motor = f.component == URT_FAULT_ENC_MOTOR;
 
     switch (f.cls) {
@@ -325,6 +341,13 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
       case URT_FAULT_CRACK:
         // the modulation follows the WG angle inside the step (core/joint.cpp)
         e->crack = std::fmin(0.9, e->crack + s);
+        break;
+      case URT_FAULT_PAYLOAD:
+        // summed here, added to the run's payload where the physics reads it (step_internal.h)
+        fs.payload_mass += s;
+        for (int i = 0; i < 3; i++) {
+          fs.payload_moment[i] += s * f.offset[i];
+        }
         break;
       case URT_FAULT_COLLISION:
         for (int i = 0; i < 3; i++) {

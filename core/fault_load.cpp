@@ -106,16 +106,17 @@ void parse_profile(const Field& pf, urt_fault_spec_t* s) {
 
 void parse_fault(const urt_model_t* m, const Field& item, urt_fault_spec_t* s) {
   Map f = item.map({"class", "severity", "unit", "profile"},
-                   {"joint", "component", "direction", "seed"});
+                   {"joint", "component", "direction", "offset", "seed"});
   std::memset(s, 0, sizeof *s);
   s->cls = parse_class(f["class"]);
   const char* cname = urt_fault_class_name(s->cls);
   const bool enc = is_encoder(s->cls), coll = s->cls == URT_FAULT_COLLISION;
+  const bool load = s->cls == URT_FAULT_PAYLOAD;
 
   // the target: a joint (not for a collision, which acts at the TCP), an encoder's component
-  if (coll) {
+  if (coll || load) {
     if (const Field* v = f.get("joint")) {
-      v->fail("a collision acts at the TCP, not on a joint");
+      v->fail(std::string("a ") + cname + " acts at the flange, not on a joint");
     }
   } else if (const Field* v = f.get("joint")) {
     s->joint = (int32_t)v->integer(0, URT_NJ - 1);
@@ -148,6 +149,15 @@ void parse_fault(const urt_model_t* m, const Field& item, urt_fault_spec_t* s) {
     }
   } else if (const Field* v = f.get("direction")) {
     v->fail("only a collision has a direction");
+  }
+  if (load) {
+    if (const Field* v = f.get("offset")) {
+      v->numbers(s->offset, 3, in(-URT_PAYLOAD_COG_MAX, URT_PAYLOAD_COG_MAX));
+    } else {
+      fail_at(item, "offset", "missing key (where the mass sits in the flange frame, m)");
+    }
+  } else if (const Field* v = f.get("offset")) {
+    v->fail("only a payload fault has an offset");
   }
   if (const Field* v = f.get("seed")) {
     if (s->cls != URT_FAULT_ENCODER_NOISE) {

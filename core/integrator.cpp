@@ -225,7 +225,8 @@ void macro_rates(const urt_model_t* m, const urt_data_t* d, const int* sub, doub
       q[j] = x[j][URT_X_Q];
       qd[j] = x[j][URT_X_QD];
     }
-    mass_and_bias(m->arm, d->live.payload, q, qd, mass, h0);
+    urt_payload_t pl;
+    mass_and_bias(m->arm, *urt__payload_physics(d, &pl), q, qd, mass, h0);
   }
   Vec6 qdd;
   arm_accel(sub, tau, qdd_pres, mass, h0, qdd);
@@ -407,7 +408,8 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
       q[j] = x[j][URT_X_Q];
       qd[j] = x[j][URT_X_QD];
     }
-    mass_and_bias(m->arm, d->live.payload, q, qd, mass_n, h_n);
+    urt_payload_t pl;
+    mass_and_bias(m->arm, *urt__payload_physics(d, &pl), q, qd, mass_n, h_n);
   }
   // sub-stepped joints first, on the arm frozen at t_n: their inertia M_pp and bias
   // (Coriolis, gravity, and the other joints' accelerations through M_pk)
@@ -469,7 +471,8 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
   // (energy drift 1.7e-4 → 8e-6 over a 10 s free swing). Finite differences of RNEA: 12 calls.
   Mat6 bq = Mat6::Zero();
   if (!m->drives_engaged) {
-    arm_linearisation(m, d->live.payload, sub, x, f, bq, wmat, gh);
+    urt_payload_t pl;
+    arm_linearisation(m, *urt__payload_physics(d, &pl), sub, x, f, bq, wmat, gh);
   }
   Lu6 wfac;
   lu6_factor(wmat, wfac);

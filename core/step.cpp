@@ -194,7 +194,8 @@ extern "C" void urt_rhs(const urt_model_t* m, const urt_data_t* d, double s, con
 
   // arm: the whole coupled 6-DoF forward dynamics, no splitting
   urt::core::Mat6 mass;
-  urt::core::mass_and_bias(m->arm, d->live.payload, q, qd, mass, bias);
+  urt_payload_t pl;
+  urt::core::mass_and_bias(m->arm, *urt__payload_physics(d, &pl), q, qd, mass, bias);
   Vec6 qdd = mass.llt().solve(tau - bias);
   for (int j = 0; j < URT_NJ; j++) {
     xdot[j * URT_NXJ + URT_X_QD] = qdd[j];

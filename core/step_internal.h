@@ -32,6 +32,40 @@ static inline const double *urt__wrench_total(const urt_data_t *d, double buf[6]
   return buf;
 }
 
+/* The payload the physics carries: the run's (urt_data_t.live, what the controller was told)
+ * plus any payload fault's point masses, combined into buf as one rigid body (mass, CoG, and
+ * the inertia about the new CoG by the parallel-axis theorem). Context: RT. */
+static inline const urt_payload_t *urt__payload_physics(const urt_data_t *d, urt_payload_t *buf) {
+  const urt_fault_state_t *fs = &d->faults;
+  if (fs->s.n == 0 || fs->payload_mass == 0.0) {
+    return &d->live.payload;
+  }
+  const urt_payload_t *p = &d->live.payload;
+  const double m1 = p->mass, m2 = fs->payload_mass, m = m1 + m2;
+  double c2[3], c[3], r1[3], r2[3];
+  for (int i = 0; i < 3; i++) {
+    c2[i] = fs->payload_moment[i] / m2;  /* the point masses' common centre */
+    c[i] = (m1 * p->cog[i] + m2 * c2[i]) / m;
+    r1[i] = p->cog[i] - c[i];
+    r2[i] = c2[i] - c[i];
+  }
+  /* point masses at one centre have no inertia about it (several at different offsets are
+   * treated as one at their centre: exact for one, a bound for many) */
+  buf->mass = m;
+  for (int i = 0; i < 3; i++) {
+    buf->cog[i] = c[i];
+  }
+  const double a1 = r1[0] * r1[0] + r1[1] * r1[1] + r1[2] * r1[2];
+  const double a2 = r2[0] * r2[0] + r2[1] * r2[1] + r2[2] * r2[2];
+  static const int ii[6] = {0, 1, 2, 0, 0, 1}, jj[6] = {0, 1, 2, 1, 2, 2};
+  for (int k = 0; k < 6; k++) {
+    const int a = ii[k], b = jj[k];
+    const double e = a == b ? 1.0 : 0.0;
+    buf->inertia[k] = p->inertia[k] + m1 * (a1 * e - r1[a] * r1[b]) + m2 * (a2 * e - r2[a] * r2[b]);
+  }
+  return buf;
+}
+
 #ifdef __cplusplus
 }
 #endif

@@ -292,7 +292,7 @@ def bench_aba(args, build, bench):
 def ratios(bench, aba):
     out = list(bench.get("ratios", []))
     for r in bench.get("urt", {}).get("runs", []):
-        if r.get("status") != "ok":
+        if r.get("status") != "ok" or r.get("faults", 0):
             continue
         if "median_us" in aba.get("native", {}):
             out.append({"dt": r["dt"], "numerator": "urt_step median",
@@ -347,8 +347,9 @@ def print_table(res):
     if not urt["runs"]:
         print(f"{'urt_step':<40} {urt['status']}: {urt.get('error', '')}")
     for r in urt["runs"]:
+        faults = f", {r['faults']} faults" if r.get("faults", 0) else ""
         if r["status"] == "ok":
-            row(f"urt_step {rate(r['dt'])}", r["dt"], r)
+            row(f"urt_step {rate(r['dt'])}{faults}", r["dt"], r)
         else:
             print(f"{'urt_step ' + rate(r['dt']):<40} error: {r.get('error', '')}")
     mj = b["mujoco"]

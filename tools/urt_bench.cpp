@@ -213,6 +213,7 @@ struct UrtRun {
   long step_errors = 0, refused_commands = 0;
   unsigned pstop = 0, isat_count = 0, vsat_count = 0;
   double max_track_err = 0;    // max |q_set − q| over the timed steps [rad]
+  int faults = 0;              // faults active during the run (kBenchFaults), 0: healthy
 };
 
 // the model as loaded at the first rate, for the JSON (bench.py builds Pinocchio from it)
@@ -252,6 +253,27 @@ ModelPtr load_model(const Options &o, double dt, std::string *err) {
   return ModelPtr(m, urt_model_free);
 }
 
+// The faults of the faulted case (issue 11: urt_step with five faults active against the
+// healthy step, same run): one of each kind of work the faults add — a drive parameter
+// (mesh stiffness), the friction law (lubricant), a state-dependent stiffness (crack), a
+// sensor chain (current gain) and a per-step random draw (encoder noise).
+constexpr int kBenchFaults = 5;
+void bench_faults(urt_fault_scenario_t *s) {
+  memset(s, 0, sizeof *s);
+  s->n = kBenchFaults;
+  const int cls[kBenchFaults] = {URT_FAULT_GEAR_STIFFNESS, URT_FAULT_LUBRICANT, URT_FAULT_CRACK,
+                                 URT_FAULT_CURRENT_GAIN, URT_FAULT_ENCODER_NOISE};
+  const double sev[kBenchFaults] = {0.5, 1.0, 0.3, 0.05, 1e-5};
+  for (int k = 0; k < kBenchFaults; ++k) {
+    s->f[k].cls = cls[k];
+    s->f[k].joint = k + 1;
+    s->f[k].severity = sev[k];
+    s->f[k].profile = URT_FAULT_STEP;
+    s->f[k].seed = 7;
+  }
+  s->f[4].component = URT_FAULT_ENC_JOINT;
+}
+
 // One urt_step workload at one dt: model, data and set-point. main() advances every case in
 // chunks, round robin, so all of them share the machine's quiet and busy moments.
 class UrtCase {
@@ -260,7 +282,7 @@ class UrtCase {
 
   // load at dt (the user's overrides, then dt) and start at rest; on failure r.status is
   // "error" and the case is never stepped
-  UrtCase(const Options &o, double dt, ArmDump *dump) {
+  UrtCase(const Options &o, double dt, ArmDump *dump, bool faulted = false) {
     r.dt = dt;
     m_ = load_model(o, dt, &r.error);
     if (!m_) {
@@ -292,6 +314,16 @@ class UrtCase {
     if (rc != 0) {
       fail(std::string("urt_data_init: ") + urt_strerror(rc));
       return;
+    }
+    if (faulted) {
+      urt_fault_scenario_t s;
+      bench_faults(&s);
+      rc = urt_data_set_faults(m, d_.get(), &s);
+      if (rc != 0) {
+        fail(std::string("urt_data_set_faults: ") + urt_strerror(rc));
+        return;
+      }
+      r.faults = kBenchFaults;
     }
     memset(&cmd_, 0, sizeof cmd_);
     // preallocated so the timed loop touches no allocator
@@ -474,6 +506,16 @@ struct Report {
   std::vector<MjRun> mj;
 };
 
+// the healthy run at dt, or nullptr
+const UrtRun *healthy_at(const std::vector<UrtRun> &runs, double dt) {
+  for (const auto &r : runs) {
+    if (r.faults == 0 && r.status == "ok" && r.dt == dt) {
+      return &r;
+    }
+  }
+  return nullptr;
+}
+
 std::string rate_label(double dt) {
   char b[32];
   snprintf(b, sizeof b, "%g kHz", 1e-3 / dt);
@@ -515,6 +557,7 @@ std::string to_json(const Options &o, const Report &rep) {
     j.begin_object();
     j.num("dt", r.dt);
     j.num("rate_hz", 1.0 / r.dt);
+    j.integer("faults", r.faults);
     j.str("status", r.status);
     if (r.status != "ok") {
       j.str("error", r.error);
@@ -591,10 +634,24 @@ std::string to_json(const Options &o, const Report &rep) {
   j.end_array();
   j.end_object();
 
-  // urt_step / mj_step medians at the same dt, for every MuJoCo variant measured
+  // urt_step / mj_step medians at the same dt, for every MuJoCo variant measured; and the
+  // faulted step against the healthy one
   j.begin_array("ratios");
+  for (const auto &f : rep.urt) {
+    const UrtRun *h = healthy_at(rep.urt, f.dt);
+    if (f.faults == 0 || f.status != "ok" || h == nullptr) {
+      continue;
+    }
+    j.begin_object();
+    j.num("dt", f.dt);
+    j.str("numerator", "urt_step median, " + std::to_string(f.faults) + " faults active");
+    j.str("denominator", "urt_step median (healthy, same run)");
+    j.num("value", f.stats.median_us / h->stats.median_us);
+    j.num("p99_value", f.stats.p99_us / h->stats.p99_us);
+    j.end_object();
+  }
   for (const auto &u : rep.urt) {
-    if (u.status != "ok") {
+    if (u.status != "ok" || u.faults) {
       continue;
     }
     for (const auto &v : kMjVariants) {
@@ -634,7 +691,8 @@ void print_table(const Options &o, const Report &rep) {
     printf("%-34s %s\n", "urt_step", rep.urt_status.c_str());
   }
   for (const auto &r : rep.urt) {
-    std::string name = "urt_step " + rate_label(r.dt);
+    std::string name = "urt_step " + rate_label(r.dt) +
+                       (r.faults ? ", " + std::to_string(r.faults) + " faults" : "");
     if (r.status == "ok") {
       print_row(name, r.dt, r.stats);
     } else {
@@ -653,7 +711,13 @@ void print_table(const Options &o, const Report &rep) {
     }
   }
   for (const auto &u : rep.urt) {
-    if (u.status != "ok") {
+    const UrtRun *h = healthy_at(rep.urt, u.dt);
+    if (u.status == "ok" && u.faults && h != nullptr) {
+      printf("ratio urt_step %d faults / healthy at %s: %.3f (median), %.3f (p99)\n", u.faults,
+             rate_label(u.dt).c_str(), u.stats.median_us / h->stats.median_us,
+             u.stats.p99_us / h->stats.p99_us);
+    }
+    if (u.status != "ok" || u.faults) {
       continue;
     }
     for (const auto &v : kMjVariants) {
@@ -708,6 +772,8 @@ int main(int argc, char **argv) {
     for (double dt : o.dts) {
       urt_cases.push_back(std::make_unique<UrtCase>(o, dt, &rep.arm));
     }
+    // the same workload at the first rate with five faults active, interleaved with the rest
+    urt_cases.push_back(std::make_unique<UrtCase>(o, o.dts.front(), nullptr, true));
   }
 
   // MuJoCo gets the same arm, drives' inertia and friction, and set-point, from the same file

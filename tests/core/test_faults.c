@@ -418,6 +418,32 @@ static void test_faults__collision_force_loads_the_gears_by_jacobian_transpose(v
   pair_free(&p);
 }
 
+static void test_faults__payload_fault_loads_the_arm_as_the_configured_payload_would(
+    void **state) {
+  (void)state;
+  // 2 kg 0.1 m out on the flange's z axis, unknown to the controller: once settled, every gear
+  // carries what a model with that payload in its config carries (the arm's own RNEA route)
+  const char *const edited[] = {"sensors.noise=false", "sensors.quantise=false",
+                                "friction_common.enabled=false", "payload.mass=2.0",
+                                "payload.cog=[0.0, 0.0, 0.1]", NULL};
+  urt_fault_spec_t f = spec(URT_FAULT_PAYLOAD, 0, 2.0);
+  f.offset[2] = 0.1;
+  pair_t p = pair_run(&f, 1, 0, 0.0, 1.5);
+  urt_model_t *me = urt_test_model(edited);
+  urt_data_t *de = new_data(me);
+  run(me, de, 1.5);
+  for (int j = 1; j < 4; j++) {
+    char what[64];
+    snprintf(what, sizeof what, "joint %d gear torque, fault vs configured payload", j);
+    expect_rel(what, p.f->t_cs[j], de->t_cs[j], 1e-3);
+  }
+  assert_true(fabs(p.f->t_cs[1] - p.h->t_cs[1]) > 5.0);  // and it is a real load change
+  assert_true(p.f->live.payload.mass == 0.0);            // the controller was not told
+  free(de);
+  urt_model_free(me);
+  pair_free(&p);
+}
+
 /* ---- profiles and truth ---- */
 
 static void test_faults__profiles_and_truth_follow_the_scenario(void **state) {
@@ -556,7 +582,12 @@ static const char kGood[] =
     "    severity: 80\n"
     "    unit: N\n"
     "    direction: [0, 3, -4]\n"
-    "    profile: {kind: random_walk, onset: 2, sigma: 1.5, seed: 9}\n";
+    "    profile: {kind: random_walk, onset: 2, sigma: 1.5, seed: 9}\n"
+    "  - class: payload\n"
+    "    severity: 0.5\n"
+    "    unit: kg\n"
+    "    offset: [0, 0.02, 0.06]\n"
+    "    profile: {kind: step, onset: 3}\n";
 
 static void test_faults__parse_reads_a_scenario(void **state) {
   (void)state;
@@ -564,7 +595,9 @@ static void test_faults__parse_reads_a_scenario(void **state) {
   urt_fault_scenario_t s;
   char err[512] = "";
   assert_int_equal(urt_faults_parse(m, kGood, "good.yaml", &s, err, sizeof err), URT_OK);
-  assert_int_equal(s.n, 3);
+  assert_int_equal(s.n, 4);
+  assert_int_equal(s.f[3].cls, URT_FAULT_PAYLOAD);
+  assert_true(s.f[3].offset[1] == 0.02 && s.f[3].offset[2] == 0.06);
   assert_int_equal(s.f[0].cls, URT_FAULT_DEMAGNETISATION);
   assert_int_equal(s.f[0].profile, URT_FAULT_LINEAR);
   assert_true(s.f[0].ramp == 2.0 && s.f[0].onset == 0.5);
@@ -611,6 +644,8 @@ static void test_faults__parse_errors_name_file_line_key_and_reason(void **state
   expect_error(m, "direction: [0, 3, -4]", "direction: [0, 0, 0]",
                "faults[2].direction: must not be the zero vector");
   expect_error(m, "kind: linear", "kind: sawtooth", "faults[0].profile.kind: must be step");
+  expect_error(m, "offset: [0, 0.02, 0.06]", "offset: [0, 0.02, 1.5]",
+               "bad.yaml:21: faults[3].offset[2]: must be in [-1, 1] (got 1.5)");
   urt_fault_scenario_t s;
   char err[256];
   assert_int_equal(urt_faults_load(m, "/nonexistent/faults.yaml", &s, err, sizeof err), URT_EIO);
@@ -634,6 +669,7 @@ int main(void) {
       cmocka_unit_test(test_faults__joint_encoder_noise_has_its_sigma),
       cmocka_unit_test(test_faults__stuck_motor_encoder_holds_its_reading),
       cmocka_unit_test(test_faults__collision_force_loads_the_gears_by_jacobian_transpose),
+      cmocka_unit_test(test_faults__payload_fault_loads_the_arm_as_the_configured_payload_would),
       cmocka_unit_test(test_faults__profiles_and_truth_follow_the_scenario),
       cmocka_unit_test(test_faults__random_walk_is_seeded_and_stays_in_range),
       cmocka_unit_test(test_faults__set_refuses_an_invalid_spec_and_keeps_the_old),

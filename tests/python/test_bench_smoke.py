@@ -60,10 +60,14 @@ def test_urt_bench__writes_stats_for_both_rates_and_mujoco(tmp_path):
 
     urt = res["urt"]
     assert urt["status"] == "ok", urt.get("error")
-    assert sorted(r["dt"] for r in urt["runs"]) == [5e-5, 1e-4]
+    # both rates healthy, and the first again with five faults active (issue 11)
+    assert sorted((r["dt"], r["faults"]) for r in urt["runs"]) == [(5e-5, 0), (5e-5, 5),
+                                                                   (1e-4, 0)]
     for run in urt["runs"]:
         check_stats(run, 2000)
         assert run["step_errors"] == 0 and run["pstop"] == 0
+    faulted = [r for r in res["ratios"] if r["numerator"] == "urt_step median, 5 faults active"]
+    assert len(faulted) == 1 and faulted[0]["dt"] == 5e-5 and faulted[0]["value"] > 0
 
     assert len(res["arm"]["links"]) == 6
     assert res["clock"]["overhead_ns"] > 0

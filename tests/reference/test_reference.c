@@ -49,9 +49,10 @@ static double rms_rel_error(const double *a, const double *b, int n) {
   return sqrt(e2 / b2);
 }
 
-/* mount: NULL, or a payload mounted on both runs half-way (a change at a step boundary) */
-static void compare_mounting(const char *const *extra, double duration, const bounds_t *lim,
-                             const urt_payload_t *mount) {
+/* mount: NULL, or a payload mounted on both runs half-way (a change at a step boundary);
+ * faults: NULL, or a fault scenario installed on both runs from the start */
+static void compare_faulted(const char *const *extra, double duration, const bounds_t *lim,
+                            const urt_payload_t *mount, const urt_fault_scenario_t *faults) {
   const char *ov[16] = {"sensors.noise=false", "sensors.quantise=false"};
   int n_ov = 2;
   for (; extra && *extra; extra++) {
@@ -61,6 +62,9 @@ static void compare_mounting(const char *const *extra, double duration, const bo
   urt_model_t *m = urt_test_model(ov);
   urt_data_t *a = calloc(1, sizeof *a), *b = calloc(1, sizeof *b);
   assert_int_equal(urt_data_init(m, a, NULL), 0);
+  if (faults) {
+    assert_int_equal(urt_data_set_faults(m, a, faults), 0);
+  }
   memcpy(b, a, sizeof *a);
   urt_traj_t tr;
   assert_int_equal(urt_traj_make_excitation(&tr, m->q0, NULL, 1), 0);
@@ -116,6 +120,11 @@ static void compare_mounting(const char *const *extra, double duration, const bo
   urt_model_free(m);
 }
 
+static void compare_mounting(const char *const *extra, double duration, const bounds_t *lim,
+                             const urt_payload_t *mount) {
+  compare_faulted(extra, duration, lim, mount, NULL);
+}
+
 static void compare(const char *const *extra, double duration, const bounds_t *lim) {
   compare_mounting(extra, duration, lim, NULL);
 }
@@ -154,11 +163,46 @@ static void test_reference__20khz_matches_cvode_with_a_payload_and_a_payload_cha
   compare_mounting(ov, 0.4, &lim, &other);
 }
 
-int main(void) {
-  const struct CMUnitTest tests[] = {
+// With three representative faults (issue 11) the same bounds hold: the shoulder's mesh at half
+// its stiffness, the elbow's friction doubled, a crack growing on wrist 1 (its stiffness
+// modulated with the WG angle inside the step). CVODE integrates urt_rhs, which reads the same
+// fault state; both runs advance it in urt__step_finish.
+static void test_reference__20khz_matches_cvode_with_three_faults(void **state) {
+  (void)state;
+  const char *const ov[] = {"simulation.dt=5e-5", NULL};
+  const bounds_t lim = {
+      {1e-5, 1e-5, 1e-5, 1e-5, 1e-5, 1e-5}, {0.02, 0.02, 0.02, 0.02, 0.02, 0.02}, 0.02};
+  urt_fault_scenario_t s;
+  memset(&s, 0, sizeof s);
+  s.n = 3;
+  s.f[0].cls = URT_FAULT_GEAR_STIFFNESS;
+  s.f[0].joint = 1;
+  s.f[0].severity = 0.5;
+  s.f[1].cls = URT_FAULT_LUBRICANT;
+  s.f[1].joint = 2;
+  s.f[1].severity = 1.0;
+  s.f[2].cls = URT_FAULT_CRACK;
+  s.f[2].joint = 3;
+  s.f[2].severity = 0.5;
+  s.f[2].profile = URT_FAULT_LINEAR;
+  s.f[2].onset = 0.1;
+  s.f[2].ramp = 0.4;
+  compare_faulted(ov, 1.0, &lim, NULL, &s);
+}
+
+// Two ctest entries share this binary (tests/reference/CMakeLists.txt): the healthy cases, and
+// with the argument "faults" the faulted one, so that each stays inside ctest's 600 s.
+int main(int argc, char **argv) {
+  const struct CMUnitTest healthy[] = {
       cmocka_unit_test(test_reference__20khz_matches_cvode_with_a_payload_and_a_payload_change),
       cmocka_unit_test(test_reference__20khz_matches_cvode_on_1_s_of_excitation),
       cmocka_unit_test(test_reference__10khz_stays_stable_and_within_the_bounds),
   };
-  return cmocka_run_group_tests_name("reference/reference", tests, NULL, NULL);
+  const struct CMUnitTest faulted[] = {
+      cmocka_unit_test(test_reference__20khz_matches_cvode_with_three_faults),
+  };
+  if (argc > 1 && strcmp(argv[1], "faults") == 0) {
+    return cmocka_run_group_tests_name("reference/reference_faults", faulted, NULL, NULL);
+  }
+  return cmocka_run_group_tests_name("reference/reference", healthy, NULL, NULL);
 }

@@ -40,6 +40,8 @@ enum {
   URT_FAULT_COLLISION,          /* a force s at the TCP along `direction` (base frame) [N]  */
   URT_FAULT_CRACK,              /* flexspline crack of depth s: K_m ×(1 − s cos²(q_WG)), a dip
                                  * each time one of the WG's two lobes passes it            [1]  */
+  URT_FAULT_PAYLOAD,            /* an unexpected point mass s at `offset` (flange frame): the
+                                 * physics carries it, the controller does not know it [kg] */
   URT_FAULT_NCLASSES
 };
 
@@ -74,6 +76,7 @@ typedef struct urt_fault_spec {
   double sigma;         /* RANDOM_WALK: severity units per √s                */
   uint64_t seed;        /* RANDOM_WALK and ENCODER_NOISE draws               */
   double direction[3];  /* COLLISION: unit vector of the force, base frame    */
+  double offset[3];     /* PAYLOAD: where the mass sits, flange frame   [m]   */
 } urt_fault_spec_t;
 
 typedef struct urt_fault_scenario {
@@ -110,6 +113,8 @@ typedef struct urt_fault_state {
   uint32_t reserved;
   urt_fault_joint_t joint[6];
   double wrench[6];                    /* collision force/torque at the TCP, base frame */
+  double payload_mass;                 /* PAYLOAD faults: their masses summed [kg]      */
+  double payload_moment[3];            /* Σ m·offset, flange frame [kg m]               */
 } urt_fault_state_t;
 
 #ifdef __cplusplus

@@ -12,7 +12,7 @@
  *
  * The integrator's W tables stay the healthy model's: ROS2 is a W-method, second order with
  * any W, and the faults only soften (stiffness loss, sag) or change non-stiff terms; the fixed
- * step is checked against CVODE with faults in tests/reference/test_reference_faults.c.
+ * step is checked against CVODE with three faults in tests/reference/test_reference.c.
  */
 #ifndef URT_FAULTS_H
 #define URT_FAULTS_H
@@ -41,11 +41,12 @@ const char *urt_fault_profile_name(int p);
  *
  *   faults:
  *     - class: demagnetisation      # urt_fault_class_name
- *       joint: 1                    # 0..5 (not for collision)
+ *       joint: 1                    # 0..5 (not for collision and payload)
  *       component: motor            # encoder classes only: motor or joint
  *       severity: 0.2
  *       unit: "1"                   # must be the class's unit
  *       direction: [0, 0, -1]       # collision only: the force's direction, base frame
+ *       offset: [0, 0, 0.05]        # payload only: where the mass sits, flange frame [m]
  *       profile: {kind: linear, onset: 0.5, ramp: 2.0}
  *
  * profile keys by kind: step {onset}, linear {onset, ramp}, exp {onset, ramp, tau},
