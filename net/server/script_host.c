@@ -80,6 +80,11 @@ static int host_snapshot_at(void *ctx, uint64_t tick, urt_snapshot_t *out) {
   return urt_loop_read(e->loop, tick, out);  // the loop keeps URT_LOOP_HISTORY ticks
 }
 
+static void host_tick_done(void *ctx, uint64_t tick, bool running) {
+  urt_emulator_t *e = ctx;
+  urt_loop_script_tick(e->loop, tick, running);
+}
+
 static const urt_model_t *host_model(void *ctx) {
   const urt_emulator_t *e = ctx;
   return e->m;
@@ -98,5 +103,6 @@ urt_script_host_t urt__script_host(urt_emulator_t *e) {
       .write_output_register = host_write_output_register,
       .model = host_model,
       .snapshot_at = host_snapshot_at,
+      .tick_done = host_tick_done,
   };
 }
