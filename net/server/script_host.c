@@ -4,6 +4,7 @@
  */
 #define _GNU_SOURCE
 #include <pthread.h>
+#include <string.h>
 #include <unistd.h>
 
 #include "emulator_internal.h"
@@ -80,8 +81,20 @@ static int host_snapshot_at(void *ctx, uint64_t tick, urt_snapshot_t *out) {
   return urt_loop_read(e->loop, tick, out);  // the loop keeps URT_LOOP_HISTORY ticks
 }
 
+// a program has run its slice of tick: keep the output registers it left for that tick's data
+// package (port_rtde.c), then let the controller run the next tick
 static void host_tick_done(void *ctx, uint64_t tick, bool running) {
   urt_emulator_t *e = ctx;
+  pthread_mutex_lock(&e->reg_lock);
+  e->out_hist_on = running;
+  if (running) {
+    struct urt__out_regs *h = &e->out_hist[tick % URT_LOOP_HISTORY];
+    h->tick = tick;
+    memcpy(h->out_int, e->regs.out_int, sizeof h->out_int);
+    memcpy(h->out_double, e->regs.out_double, sizeof h->out_double);
+    memcpy(h->out_bit, e->regs.out_bit, sizeof h->out_bit);
+  }
+  pthread_mutex_unlock(&e->reg_lock);
   urt_loop_script_tick(e->loop, tick, running);
 }
 
