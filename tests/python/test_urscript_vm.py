@@ -6,6 +6,7 @@ keeps serving (net/urscript/script_sched.c)."""
 import socket
 import time
 
+from rtde_client import RtdeClient
 from urtwin_proc import Emulator, PrimaryReader, RtReader
 
 RUNAWAY = """def runaway():
@@ -110,3 +111,39 @@ def test_two_threads_run_side_by_side_and_join():
         assert "joined 2" in texts
         assert ("PROGRAM_XXX_STOPPED", "two") in keys
         assert not [m for m in msgs if m["type"] == 10]
+
+
+TICK_COUNTER = """def counter():
+  i = 0
+  while i < 1500:
+    write_output_integer_register(0, i)
+    speedj([0, 0, 0, 0, 0, 0.05], 2.0, 0.002)
+    i = i + 1
+  end
+end
+"""
+
+
+def test_each_data_package_pairs_one_ticks_state_with_that_ticks_registers():
+    """A program runs in controller time: one slice per tick, the controller waiting for it, and
+    the RTDE package of tick k carries the registers the slice of tick k-1 wrote (the slice whose
+    commands tick k executed), however late the runner or the I/O thread are. The program writes
+    its loop count each tick: over ~3 s of packages the register goes up by exactly one per
+    package, and the package's timestamp by exactly one period."""
+    with Emulator() as emu, RtdeClient(emu.host) as c:
+        c.negotiate_protocol_version(2)
+        c.setup_outputs(["timestamp", "output_int_register_0", "runtime_state"], 500.0)
+        c.start()
+        emu.send_script(TICK_COUNTER, port=30002)
+        rows, t_end = [], time.monotonic() + 10.0
+        while time.monotonic() < t_end:
+            v = c.receive().values
+            if v["runtime_state"] == 2 and v["output_int_register_0"] > 0:  # PLAYING
+                rows.append((v["timestamp"], v["output_int_register_0"]))
+            elif rows:
+                break
+            if len(rows) % 200 == 199:
+                time.sleep(0.05)  # a slow client: the packages wait in the socket
+        assert len(rows) > 1000, len(rows)
+        steps = {(round((b[0] - a[0]) / emu.period), b[1] - a[1]) for a, b in zip(rows, rows[1:])}
+        assert steps == {(1, 1)}, sorted(steps)[:10]
