@@ -134,6 +134,7 @@ static void test_client__flange_pose_and_getters(void **state) {
   R.f.s.qdd_target[1] = -0.5;
   R.f.s.tau[3] = 4.5;
   R.f.s.q[5] = 0.25;
+  R.f.s.q_target[5] = 0.5;  // get_joint_positions() is the target, not the encoders
   R.f.s.temperature[2] = 41.5;
   // get_actual_tool_flange_pose is the forward kinematics of the actual joints
   // (script_builtins_state.c), which this fake's snapshot does not keep consistent
@@ -143,7 +144,7 @@ static void test_client__flange_pose_and_getters(void **state) {
               "textmsg(get_joint_torques())\ntextmsg(get_joint_positions())\ntextmsg(get_joint_temp(2))\n");
   const char *want[] = {"0.008", "1.25", "[0,0.01,0.04]",
                         "[0,0,0.07,0,0,0]", "[0,-0.5,0,0,0,0]", "[0,0,0,4.5,0,0]",
-                        "[0,0,0,0,0,0.25]", "41.5"};
+                        "[0,0,0,0,0,0.5]", "41.5"};
   for (int k = 0; k < 8; k++) assert_string_equal(R.f.msg[k].text, want[k]);
 }
 
