@@ -28,7 +28,7 @@
 
 #define DRIVE_HISTORY 1024          /* drive samples kept (1 s at 1 kHz)            */
 #define CATCH_UP_LIMIT 50           /* periods behind before the clock is re-anchored */
-#define SCRIPT_WAIT_MAX_NS 250000000LL /* longest wait for a program's slice (then go on) */
+#define SCRIPT_WAIT_MAX_NS 5000000LL /* longest wait for a program's slice (then go on)  */
 #define STACK_PREFAULT (256 * 1024) /* bytes of stack touched before the loop        */
 #define PHYSICS_STACK (1024 * 1024) /* the physics thread's whole stack                */
 
@@ -469,12 +469,12 @@ static bool wait_for_grant(urt_loop_t *l, uint64_t done) {
 
 // A controller runs the URScript program's slice inside its cycle: tick n's commands and
 // register writes belong to tick n, whatever the OS does with the runner thread (a slice that
-// came late would otherwise drive the arm one or more cycles after the state it read, and the
-// RTDE package of one tick would pair target_q with another tick's registers). So while a
-// program runs, tick n+1 starts only once the program has run its slice of tick n. Pacing, not
-// a lock: the wait is a futex sleep as the pacing sleep is, bounded by SCRIPT_WAIT_MAX_NS; a
-// slice later than that (a runner thread starved for a quarter second) is counted, and the
-// controller runs free until the program has caught up tick by tick. Returns the time waited.
+// came late would otherwise drive the arm one or more cycles after the state it read). So while
+// a program runs, tick n+1 starts only once the program has run its slice of tick n. Pacing,
+// not a lock: the wait is a futex sleep as the pacing sleep is, bounded by SCRIPT_WAIT_MAX_NS
+// (5 ms, 2.5 e-Series periods: it absorbs a runner woken late, not one starved for long, which
+// would otherwise slow the controller's clock for everyone); a slice later than that is counted,
+// and the controller runs free until the program has caught up tick by tick.
 static int64_t wait_for_script(urt_loop_t *l, uint64_t published) {
   if (!atomic_load(&l->script_on)) {
     l->script_behind = false;

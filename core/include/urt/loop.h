@@ -131,7 +131,7 @@ void urt_loop_grant(urt_loop_t *l, uint64_t n);
  * the next tick, and it runs no further until the report of that one. A program's first report
  * names the tick before its first slice. running = false: no program runs, the controller
  * keeps its own pace. The controller
- * waits at most 250 ms for a slice, then goes on (counted in urt_loop_script_late) until the
+ * waits at most 5 ms for a slice, then goes on (counted in urt_loop_script_late) until the
  * program has caught up. */
 void urt_loop_script_tick(urt_loop_t *l, uint64_t tick, bool running);
 uint64_t urt_loop_script_late(const urt_loop_t *l);
