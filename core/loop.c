@@ -28,7 +28,6 @@
 
 #define DRIVE_HISTORY 1024          /* drive samples kept (1 s at 1 kHz)            */
 #define CATCH_UP_LIMIT 50           /* periods behind before the clock is re-anchored */
-#define SCRIPT_WAIT_MAX_NS 5000000LL /* longest wait for a program's slice (then go on)  */
 #define STACK_PREFAULT (256 * 1024) /* bytes of stack touched before the loop        */
 #define PHYSICS_STACK (1024 * 1024) /* the physics thread's whole stack                */
 
@@ -65,14 +64,6 @@ struct urt_loop {
   /* lockstep */
   _Atomic uint64_t granted;         /* ticks allowed so far */
   _Atomic uint32_t grant_word;
-
-  /* the URScript program's slice (urt_loop_script_tick) */
-  atomic_bool script_on;            /* a program runs: tick n+1 waits for its slice of n */
-  _Atomic uint64_t script_done;     /* last tick whose slice the program has run         */
-  _Atomic uint32_t script_word;     /* bumped at each report, for the futex wait        */
-  atomic_bool script_waiting;       /* the physics thread waits on script_word           */
-  bool script_behind;               /* physics: gave up waiting; free until caught up    */
-  _Atomic uint64_t script_late;     /* waits given up                                    */
 
   /* statistics */
   _Atomic uint64_t overruns, missed_periods;
@@ -311,23 +302,6 @@ void urt_loop_grant(urt_loop_t *l, uint64_t n) {
   futex_wake_all(&l->grant_word);
 }
 
-void urt_loop_script_tick(urt_loop_t *l, uint64_t tick, bool running) {
-  if (running) {
-    atomic_store(&l->script_done, tick);
-    atomic_store(&l->script_on, true);
-  } else {
-    atomic_store(&l->script_on, false);
-  }
-  atomic_fetch_add(&l->script_word, 1);
-  if (atomic_load(&l->script_waiting)) {
-    futex_wake_all(&l->script_word);
-  }
-}
-
-uint64_t urt_loop_script_late(const urt_loop_t *l) {
-  return atomic_load_explicit(&l->script_late, memory_order_relaxed);
-}
-
 void urt_loop_get_stats(const urt_loop_t *l, urt_loop_stats_t *out) {
   uint64_t dropped = 0;
   int n = atomic_load(&l->n_producers);
@@ -467,46 +441,6 @@ static bool wait_for_grant(urt_loop_t *l, uint64_t done) {
   return false;
 }
 
-// A controller runs the URScript program's slice inside its cycle: tick n's commands and
-// register writes belong to tick n, whatever the OS does with the runner thread (a slice that
-// came late would otherwise drive the arm one or more cycles after the state it read). So while
-// a program runs, tick n+1 starts only once the program has run its slice of tick n. Pacing,
-// not a lock: the wait is a futex sleep as the pacing sleep is, bounded by SCRIPT_WAIT_MAX_NS
-// (5 ms, 2.5 e-Series periods: it absorbs a runner woken late, not one starved for long, which
-// would otherwise slow the controller's clock for everyone); a slice later than that is counted,
-// and the controller runs free until the program has caught up tick by tick.
-static int64_t wait_for_script(urt_loop_t *l, uint64_t published) {
-  if (!atomic_load(&l->script_on)) {
-    l->script_behind = false;
-    return 0;
-  }
-  if (l->script_behind) {
-    if (atomic_load(&l->script_done) + 1 < published) {
-      return 0;
-    }
-    l->script_behind = false;  // caught up: back in step
-  }
-  int64_t t0 = now_ns(), waited = 0;
-  bool slept = false;
-  atomic_store(&l->script_waiting, true);
-  while (!atomic_load_explicit(&l->stop, memory_order_relaxed)) {
-    uint32_t seen = atomic_load(&l->script_word);
-    if (!atomic_load(&l->script_on) || atomic_load(&l->script_done) >= published) {
-      break;
-    }
-    waited = now_ns() - t0;
-    if (waited >= SCRIPT_WAIT_MAX_NS) {
-      atomic_fetch_add_explicit(&l->script_late, 1, memory_order_relaxed);
-      l->script_behind = true;
-      break;
-    }
-    futex_wait(&l->script_word, seen, SCRIPT_WAIT_MAX_NS - waited);
-    slept = true;
-  }
-  atomic_store(&l->script_waiting, false);
-  return slept ? now_ns() - t0 : 0;
-}
-
 static void *physics_main(void *arg) {
   urt_loop_t *l = arg;
   rt_setup(&l->cfg);
@@ -516,10 +450,6 @@ static void *physics_main(void *arg) {
   while (!atomic_load_explicit(&l->stop, memory_order_relaxed)) {
     if (pacing == URT_PACING_LOCKSTEP && !wait_for_grant(l, tick)) {
       break;
-    }
-    int64_t waited = wait_for_script(l, tick);
-    if (pacing == URT_PACING_TICK || pacing == URT_PACING_STEP) {
-      anchor += waited;  // the controller's clock waited for its program: no burst afterwards
     }
     int64_t start = now_ns();
     drain_commands(l);

@@ -468,9 +468,6 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",
                (unsigned long long)s.ticks, (unsigned long long)s.overruns,
                (unsigned long long)s.missed_periods);
-  // a program's slices the controller stopped waiting for (5 ms): their ticks ran without them
-  std::fprintf(stderr, "urtwin: URScript slices late: %llu\n",
-               (unsigned long long)urt_loop_script_late(loop));
   print_ring_drops(loop);
   urt_dds_bridge_destroy(dds);
   urt_lcm_bridge_destroy(bridge);

@@ -386,8 +386,7 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
     snprintf(err->text, sizeof err->text, "Out of memory");
     return -1;
   }
-  // the controller runs the program's slice of each tick before its next tick (the slice
-  // reads that tick's state, its commands and register writes belong to it)
+  // each tick's slice is reported (the emulator pairs its register writes with the tick)
   void (*tick_done)(void *, uint64_t, bool) = p->secondary ? NULL : h->host->tick_done;
   if (tick_done) {
     tick_done(h->host->ctx, S->tick > 0 ? S->tick - 1 : 0, true);

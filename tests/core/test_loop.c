@@ -225,42 +225,6 @@ static void test_loop__drive_samples_at_their_rate(void **state) {
   urt_loop_destroy(l);
 }
 
-// A running program's slice is part of the controller's cycle: the loop runs one tick past the
-// program's last report and waits there; a slice later than 5 ms is counted and the loop goes
-// on; once the program has ended, the loop keeps its own pace.
-static void test_loop__waits_for_the_programs_slice(void **state) {
-  (void)state;
-  urt_loop_t *l = make_loop(URT_PACING_TICK, 0);
-  assert_int_equal(urt_loop_start(l), 0);
-  uint64_t t0 = urt_loop_wait(l, 0, 2000);
-  assert_true(t0 >= 1);
-  // in step: each report lets the next tick run, and the loop goes no further unless the
-  // report was late (then it is counted)
-  for (int k = 0; k < 20; k++) {
-    uint64_t now = urt_loop_latest_tick(l), late = urt_loop_script_late(l);
-    urt_loop_script_tick(l, now, true);
-    uint64_t next = urt_loop_wait(l, now, 2000);
-    assert_true(next == now + 1 || urt_loop_script_late(l) > late);
-  }
-  // no report: after 5 ms the loop goes on, and counts it
-  uint64_t late = urt_loop_script_late(l);
-  urt_loop_script_tick(l, urt_loop_latest_tick(l), true);
-  struct timespec a, b;
-  clock_gettime(CLOCK_MONOTONIC, &a);
-  uint64_t stuck = urt_loop_wait(l, urt_loop_latest_tick(l), 2000);
-  assert_true(urt_loop_wait(l, stuck, 2000) > stuck);
-  clock_gettime(CLOCK_MONOTONIC, &b);
-  double waited = (double)(b.tv_sec - a.tv_sec) + 1e-9 * (double)(b.tv_nsec - a.tv_nsec);
-  assert_true(waited > 0.004);
-  assert_true(urt_loop_script_late(l) > late);
-  urt_loop_script_tick(l, 0, false);  // the program ended: free pace
-  uint64_t t1 = urt_loop_latest_tick(l);
-  usleep(100000);
-  assert_true(urt_loop_latest_tick(l) >= t1 + 25);
-  urt_loop_stop(l);
-  urt_loop_destroy(l);
-}
-
 int main(void) {
 #ifdef URT_TSAN_BUILD
   // Under ThreadSanitizer a step costs ~100x its release time, so the tests that need the
@@ -281,7 +245,6 @@ int main(void) {
       cmocka_unit_test(test_loop__commands_reach_the_controller),
       cmocka_unit_test(test_loop__each_ring_counts_its_own_drops),
       cmocka_unit_test(test_loop__drive_samples_at_their_rate),
-      cmocka_unit_test(test_loop__waits_for_the_programs_slice),
   };
 #endif
   return cmocka_run_group_tests(tests, setup, teardown);

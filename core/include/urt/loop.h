@@ -126,16 +126,6 @@ uint64_t urt_loop_producer_dropped(const urt_loop_t *l, int producer);
 /* Lockstep pacing: allow n more controller ticks. Other pacings ignore it. */
 void urt_loop_grant(urt_loop_t *l, uint64_t n);
 
-/* The URScript program's slice (runner thread): running = true reports that the program has
- * run its slice of published tick `tick` (its commands are submitted): the controller may run
- * the next tick, and it runs no further until the report of that one. A program's first report
- * names the tick before its first slice. running = false: no program runs, the controller
- * keeps its own pace. The controller
- * waits at most 5 ms for a slice, then goes on (counted in urt_loop_script_late) until the
- * program has caught up. */
-void urt_loop_script_tick(urt_loop_t *l, uint64_t tick, bool running);
-uint64_t urt_loop_script_late(const urt_loop_t *l);
-
 /* Loop statistics (any thread). */
 typedef struct urt_loop_stats {
   uint64_t ticks, overruns, missed_periods, cmd_dropped;

@@ -83,7 +83,7 @@ typedef struct urt_script_host {
    * nonzero when the controller no longer keeps it (or has not published it yet). */
   int (*snapshot_at)(void *ctx, uint64_t tick, urt_snapshot_t *out);
   /* Nullable: a (main) program has run its slice of tick (running), or has ended (!running):
-   * the controller runs a program's slice inside its cycle and waits for it (urt_loop_script_tick). */
+   * the emulator keeps the output registers of each slice for that tick's RTDE package. */
   void (*tick_done)(void *ctx, uint64_t tick, bool running);
 } urt_script_host_t;
 
