@@ -9,6 +9,8 @@ extern "C" int urt_data_init(const urt_model_t* m, urt_data_t* d, const double* 
   std::memset(d, 0, sizeof *d);
   const double* q0 = q ? q : m->q0;
   d->live.payload = m->payload;  // the configured payload; the run may change it
+  std::memcpy(d->live.payload_inertia_declared, m->payload.inertia, sizeof d->live.payload_inertia_declared);
+  urt_payload_physical(m->payload.inertia, d->live.payload.inertia);
 
   // the torque each gear output must carry at rest
   double zero[URT_NJ] = {0}, g[URT_NJ];

@@ -224,7 +224,8 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   std::memcpy(s->gravity_target, c->gravity, sizeof s->gravity_target);
   s->tool_voltage = c->tool_voltage;
   std::memcpy(s->payload_cog, d->live.payload.cog, sizeof s->payload_cog);
-  std::memcpy(s->payload_inertia, d->live.payload.inertia, sizeof s->payload_inertia);
+  // the tensor as the program declared it (the physics carries its nearest PSD one)
+  std::memcpy(s->payload_inertia, d->live.payload_inertia_declared, sizeof s->payload_inertia);
 
   // power
   const double v_bus = m->control[0].v_net;

@@ -88,6 +88,15 @@ struct urt_emulator {
   urt_rtde_registry_t rtde_registry;
   pthread_mutex_t reg_lock;
   urt_rtde_registers_t regs;
+  /* the output registers as a running program left them after its slice of each tick (under
+   * reg_lock): the data package of tick k carries those of slice k - 1, the slice whose
+   * commands tick k executed, however late the I/O thread streams it */
+  struct urt__out_regs {
+    uint64_t slice;              /* 1 + the tick of the slice (0: none yet) */
+    int32_t out_int[URT_RTDE_NREG];
+    double out_double[URT_RTDE_NREG];
+    uint8_t out_bit[URT_RTDE_NBITREG];
+  } out_hist[URT_LOOP_HISTORY];
 
   /* 29999 */
   urt_dashboard_ctx_t dash_ctx;

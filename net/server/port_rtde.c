@@ -146,6 +146,16 @@ void urt__rtde_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
     if (!have_regs) {
       pthread_mutex_lock(&e->reg_lock);
       regs = e->regs;
+      // a running program's outputs as its slice of the previous tick left them: the slice
+      // whose commands this tick executed (on a controller both come from one cycle; the
+      // program may have run further by the time this thread streams the tick)
+      // (also for the ticks a late I/O thread streams after the program has ended)
+      const struct urt__out_regs *h = &e->out_hist[(s->tick - 1) % URT_LOOP_HISTORY];
+      if (s->tick > 0 && h->slice == s->tick) {
+        memcpy(regs.out_int, h->out_int, sizeof regs.out_int);
+        memcpy(regs.out_double, h->out_double, sizeof regs.out_double);
+        memcpy(regs.out_bit, h->out_bit, sizeof regs.out_bit);
+      }
       pthread_mutex_unlock(&e->reg_lock);
       have_regs = true;
     }

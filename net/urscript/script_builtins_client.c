@@ -56,8 +56,11 @@ static int b_get_actual_joint_positions_history(vm *V, const us_node *n, sv *a, 
 }
 
 
-/* get_joint_positions(): the old name of get_actual_joint_positions (URCL's script calls it) */
-static int b_get_joint_positions(vm *V, const us_node *n, sv *a, sv *out) { return urt__us_list_out(V, n, urt__us_snap(V)->q, 6, out); }
+/* get_joint_positions(): the controller's current target joint positions (external_control.md
+ * §2.4.3: "the robot's current target"), not the encoders. URCL's script takes it as the start
+ * of each spline and as the servo set-point when it enters servoj mode; the measured q (one
+ * encoder count from the set-point at rest) made that first servoj move a resting arm. */
+static int b_get_joint_positions(vm *V, const us_node *n, sv *a, sv *out) { return urt__us_list_out(V, n, urt__us_snap(V)->q_target, 6, out); }
 static int b_get_actual_joint_accelerations(vm *V, const us_node *n, sv *a, sv *out) { return urt__us_list_out(V, n, urt__us_snap(V)->qdd, 6, out); }
 static int b_get_tcp_force(vm *V, const us_node *n, sv *a, sv *out) { return urt__us_list_out(V, n, urt__us_snap(V)->tcp_force, 6, out); }
 

@@ -56,11 +56,12 @@ static int b_get_target_payload_inertia(vm *V, const us_node *n, sv *a, sv *out)
   return urt__us_list_out(V, n, urt__us_snap(V)->payload_inertia, 6, out);
 }
 
-/* the payload the arm carries now, as the snapshot reports it */
+/* the payload the arm carries now: the snapshot's, with the declared inertia tensor replaced by
+ * the nearest PSD one, as the physics carries it (a declared tensor need not be a body's) */
 static urt_payload_t mounted(const urt_snapshot_t *s) {
   urt_payload_t p = {.mass = s->payload_mass};
   memcpy(p.cog, s->payload_cog, sizeof p.cog);
-  memcpy(p.inertia, s->payload_inertia, sizeof p.inertia);
+  urt_payload_physical(s->payload_inertia, p.inertia);
   return p;
 }
 

@@ -420,11 +420,19 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
     snprintf(err->text, sizeof err->text, "Out of memory");
     return -1;
   }
+  // each tick's slice is reported (the emulator pairs its register writes with the tick)
+  void (*tick_done)(void *, uint64_t, bool) = p->secondary ? NULL : h->host->tick_done;
+  if (tick_done) {
+    tick_done(h->host->ctx, S->tick > 0 ? S->tick - 1 : 0, true);
+  }
   for (;;) {
     if (!p->secondary && urt__us_service_tick(&S->service, h, err) != X_OK) {
       break;  // the watchdog fired: the program stops with its message
     }
     run_tick(S);
+    if (tick_done) {
+      tick_done(h->host->ctx, S->tick, true);
+    }
     if (program_over(S)) {
       break;
     }
@@ -435,6 +443,9 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
       }
       break;
     }
+  }
+  if (tick_done) {
+    tick_done(h->host->ctx, 0, false);
   }
   stop_all(S);
   us_thread *main = S->main;

@@ -791,13 +791,13 @@ static void test_controller__set_payload_mounts_it_at_the_next_tick(void **state
   urt_snapshot_fill(r.m, r.c, r.d, &s);
   assert_true(s.payload_mass == 3.0 && s.payload_cog[2] == 0.1 && s.payload_inertia[2] == 0.003);
 
-  // refused: over the UR5's 5 kg, and a tensor no body has
+  // refused: over the UR5's 5 kg, and a negative principal moment (UR's rule)
   r.c->fault = 0;
   p.value = 6.0;
   rig_period(&r, &p);
   assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
   p.value = 1.0;
-  p.tau[3] = 0.01;  // Ixy² > Ixx Iyy
+  p.tau[1] = -0.01;  // Iyy < 0
   r.c->fault = 0;
   rig_period(&r, &p);
   assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);

@@ -315,12 +315,11 @@ static void test_model_load__rejects_a_payload_the_ur5_cannot_carry(void **state
   bad = edit(ur5_text, "payload:", "cog: [0.0, 0.0, 0.0]", "cog: [0.0, 0.0, 1.5]", &line);
   expect_error(bad, NULL, URT_ECONFIG, ":%d: payload.cog[2]: must be in [-1, 1] (got 1.5)", line);
   free(bad);
-  // a tensor no body has: Ixy beyond what Ixx and Iyy allow
+  // a negative principal moment (UR's rule; a tensor that is merely no body's is taken)
   bad = edit(ur5_text, "payload:", "inertia: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]",
-             "inertia: [0.01, 0.01, 0.01, 0.02, 0.0, 0.0]", &line);
+             "inertia: [0.01, -0.01, 0.01, 0.0, 0.0, 0.0]", &line);
   expect_error(bad, NULL, URT_ECONFIG,
-               ":%d: payload.inertia: payload inertia must be positive semi-definite (a real "
-               "body's)", line);
+               ":%d: payload.inertia: payload inertia Ixx, Iyy and Izz must not be negative", line);
   free(bad);
 }
 

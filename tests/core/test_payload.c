@@ -26,11 +26,14 @@ static void test_payload__invalid_names_what_no_payload_can_be(void **state) {
   p.cog[1] = -1.2;
   assert_non_null(strstr(urt_payload_invalid(&p), "centre of gravity"));
   p = kLoad;
-  p.inertia[0] = -0.001;  // a negative moment
-  assert_non_null(strstr(urt_payload_invalid(&p), "positive semi-definite"));
+  p.inertia[0] = -0.001;  // a negative moment: UR refuses it
+  assert_non_null(strstr(urt_payload_invalid(&p), "negative"));
   p = kLoad;
-  p.inertia[4] = 0.01;  // Ixz² > Ixx Izz
-  assert_non_null(strstr(urt_payload_invalid(&p), "positive semi-definite"));
+  p.inertia[4] = 0.01;  // Ixz² > Ixx Izz: no body's, but UR takes it (its rule is the bounds)
+  assert_null(urt_payload_invalid(&p));
+  p = kLoad;
+  p.inertia[5] = -133.5;
+  assert_non_null(strstr(urt_payload_invalid(&p), "133"));
   p = kLoad;
   p.inertia[2] = 200.0;
   assert_non_null(strstr(urt_payload_invalid(&p), "133"));
@@ -173,9 +176,57 @@ static void test_payload__steps_settle_at_the_loaded_holding_current(void **stat
   urt_model_free(m);
 }
 
+// The physics carries the nearest PSD tensor: a body's comes back bit for bit; URCL's
+// set_target_payload tensor (a negative determinant) gets its negative principal moment raised
+// to 0, the other axes and moments kept: the result is PSD, symmetric, and no PSD tensor is
+// nearer than it along the removed axis (the difference is −λ v vᵀ).
+static void test_payload__physical_is_the_nearest_psd_tensor(void **state) {
+  (void)state;
+  double out[6];
+  urt_payload_physical(kLoad.inertia, out);
+  assert_memory_equal(out, kLoad.inertia, sizeof out);
+  const double urcl[6] = {0.4, 0.7, 0.8, 0.2, 0.5, 0.6};  // URCL's test tensor: det = -0.007
+  urt_payload_t p = {1.0, {0.2, 0.3, 0.1}, {0}};
+  memcpy(p.inertia, urcl, sizeof p.inertia);
+  assert_null(urt_payload_invalid(&p));
+  urt_payload_physical(urcl, out);
+  // PSD: every principal minor of the result ≥ 0 (up to rounding)
+  double xx = out[0], yy = out[1], zz = out[2], xy = out[3], xz = out[4], yz = out[5];
+  double det = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
+  assert_true(xx >= 0 && yy >= 0 && zz >= 0);
+  assert_true(xx * yy - xy * xy >= -1e-15 && xx * zz - xz * xz >= -1e-15 && yy * zz - yz * yz >= -1e-15);
+  assert_true(fabs(det) < 1e-15);  // one principal moment raised to exactly 0
+  // nearer than other PSD tensors: the zero tensor, and A shifted by its smallest eigenvalue
+  // (A + 0.1 I is PSD here: the negative moment is about -0.05)
+  double d2 = 0, d0 = 0, ds = 0;
+  for (int i = 0; i < 6; i++) {
+    double w = i < 3 ? 1.0 : 2.0;  // off-diagonal elements count twice in the Frobenius norm
+    d2 += w * (out[i] - urcl[i]) * (out[i] - urcl[i]);
+    d0 += w * urcl[i] * urcl[i];
+    ds += i < 3 ? 0.1 * 0.1 : 0.0;
+  }
+  assert_true(d2 > 0.0 && d2 < d0 && d2 < ds);
+  // numpy.linalg.eigh: eigenvalues -0.01308339, 0.34014702, 1.57293637; V diag(max(λ, 0)) Vᵀ
+  const double want[6] = {0.4051330304655869, 0.7020054012757757, 0.8059449562435602,
+                          0.20320839303145502, 0.4944759035567094, 0.5965471717628471};
+  for (int i = 0; i < 6; i++) assert_true(fabs(out[i] - want[i]) < 1e-12);
+  // mounting it: the run's physics carries the PSD tensor, the declared one is kept as declared
+  const urt_model_t *m = urt_test_model(NULL);
+  urt_data_t *d = calloc(1, sizeof *d);
+  assert_int_equal(urt_data_init(m, d, NULL), URT_OK);
+  assert_int_equal(urt_data_set_payload(m, d, &p), URT_OK);
+  assert_memory_equal(d->live.payload_inertia_declared, urcl, sizeof urcl);
+  assert_memory_equal(d->live.payload.inertia, out, sizeof out);
+  assert_int_equal(urt_data_set_payload_target(m, d, &p, 0.5), URT_OK);
+  assert_memory_equal(d->live.payload_target.inertia, out, sizeof out);
+  free(d);
+  urt_model_free((urt_model_t *)m);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_payload__invalid_names_what_no_payload_can_be),
+      cmocka_unit_test(test_payload__physical_is_the_nearest_psd_tensor),
       cmocka_unit_test(test_payload__set_mounts_a_valid_payload_and_keeps_the_old_on_refusal),
       cmocka_unit_test(test_payload__zero_payload_leaves_the_dynamics_bit_for_bit),
       cmocka_unit_test(test_payload__transition_is_linear_and_ends_on_the_target),

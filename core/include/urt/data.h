@@ -71,6 +71,10 @@ typedef struct urt_command {
  * one period all see the same parameters and the next period the new ones. */
 typedef struct urt_live_params {
   urt_payload_t payload;             /* what link 6 carries (set_payload, set_target_payload) */
+  /* the inertia tensor as declared (the loader, set_target_payload): what the controller
+   * reports (get_target_payload_inertia, RTDE payload_inertia). payload.inertia is its nearest
+   * PSD tensor (urt_payload_physical), which the physics carries */
+  double payload_inertia_declared[6];
   /* a transition in progress (set_target_payload's transition_time): payload moves linearly
    * to payload_target, reaching it when payload_time_left [s] runs out (0: none) */
   urt_payload_t payload_target;

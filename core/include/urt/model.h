@@ -49,10 +49,16 @@ typedef struct urt_payload {
 #define URT_PAYLOAD_COG_MAX 1.0   /* |CoG component| bound: within a metre of the flange [m] */
 #define URT_PAYLOAD_INERTIA_MAX 133.0 /* |inertia element| bound: URScript's [kg m²] */
 
-/* Why a payload is not physical, or NULL when it is: finite, 0 ≤ mass ≤ URT_PAYLOAD_MASS_MAX,
- * |cog_i| ≤ URT_PAYLOAD_COG_MAX, |I_ij| ≤ URT_PAYLOAD_INERTIA_MAX and the inertia matrix
- * positive semi-definite. The loader, the controller and URScript share it. Context: RT. */
+/* Why a payload is refused, or NULL when it is taken: finite, 0 ≤ mass ≤ URT_PAYLOAD_MASS_MAX,
+ * |cog_i| ≤ URT_PAYLOAD_COG_MAX, |I_ij| ≤ URT_PAYLOAD_INERTIA_MAX and Ixx, Iyy, Izz ≥ 0 (UR's
+ * rule; a controller takes a tensor no body has). The loader, the controller and URScript share
+ * it. Context: RT. */
 const char *urt_payload_invalid(const urt_payload_t *p);
+
+/* The nearest positive semi-definite inertia tensor to in (Frobenius norm: the principal axes
+ * kept, negative principal moments raised to 0), [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]; a PSD tensor
+ * is returned unchanged. What the physics carries for a declared tensor. Context: RT. */
+void urt_payload_physical(const double in[6], double out[6]);
 
 typedef struct urt_arm_params {
   urt_link_params_t link[URT_NJ];

@@ -134,6 +134,7 @@ static void test_client__flange_pose_and_getters(void **state) {
   R.f.s.qdd_target[1] = -0.5;
   R.f.s.tau[3] = 4.5;
   R.f.s.q[5] = 0.25;
+  R.f.s.q_target[5] = 0.5;  // get_joint_positions() is the target, not the encoders
   R.f.s.temperature[2] = 41.5;
   // get_actual_tool_flange_pose is the forward kinematics of the actual joints
   // (script_builtins_state.c), which this fake's snapshot does not keep consistent
@@ -143,7 +144,7 @@ static void test_client__flange_pose_and_getters(void **state) {
               "textmsg(get_joint_torques())\ntextmsg(get_joint_positions())\ntextmsg(get_joint_temp(2))\n");
   const char *want[] = {"0.008", "1.25", "[0,0.01,0.04]",
                         "[0,0,0.07,0,0,0]", "[0,-0.5,0,0,0,0]", "[0,0,0,4.5,0,0]",
-                        "[0,0,0,0,0,0.25]", "41.5"};
+                        "[0,0,0,0,0,0.5]", "41.5"};
   for (int k = 0; k < 8; k++) assert_string_equal(R.f.msg[k].text, want[k]);
 }
 
@@ -214,9 +215,11 @@ static void test_client__gravity_and_target_payload_commands(void **state) {
   assert_int_equal(R.f.cmd[3].kind, URT_CTRL_SET_PAYLOAD);
   assert_true(R.f.cmd[3].tau[0] == 0.01 && R.f.cmd[3].tau[1] == 0.02 && R.f.cmd[3].tau[2] == 0.03 &&
               R.f.cmd[3].tau[3] == 0.001 && R.f.cmd[3].tau[5] == 0);
-  // a body no payload can be, and more than the UR5 carries, are runtime errors saying why
-  assert_int_not_equal(sr_run(&R, "set_target_payload(1, [0, 0, 0], [0.01, 0.01, 0.01, 0.5, 0, 0])\n"), 0);
-  assert_non_null(strstr(R.err.text, "positive semi-definite"));
+  // UR's rule: a tensor no body has is taken (the physics carries its nearest PSD one), a
+  // negative Ixx/Iyy/Izz or more than the UR5 carries are runtime errors saying why
+  sr_must(&R, "set_target_payload(1, [0, 0, 0], [0.01, 0.01, 0.01, 0.5, 0, 0])\n");
+  assert_int_not_equal(sr_run(&R, "set_target_payload(1, [0, 0, 0], [0.01, -0.01, 0.01, 0, 0, 0])\n"), 0);
+  assert_non_null(strstr(R.err.text, "must not be negative"));
   memset(&R.err, 0, sizeof R.err);
   assert_int_not_equal(sr_run(&R, "set_payload(5.5)\n"), 0);
   assert_non_null(strstr(R.err.text, "set_payload: payload mass must be within [0, 5] kg"));

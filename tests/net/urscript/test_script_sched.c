@@ -300,6 +300,55 @@ static void test_sched__secondary_program_may_not_start_threads(void **state) {
   urt__us_prog_free(p);
 }
 
+/* the controller waits for each tick's slice (urt_loop_script_tick): the VM reports every tick
+ * it processed, in order, after that tick's commands, first the tick before its first slice,
+ * and at the end that no program runs; a secondary program reports nothing */
+static struct {
+  int n, n_cmd_at[256];
+  uint64_t tick[256];
+  bool running[256];
+} R;
+
+static void record_tick_done(void *ctx, uint64_t tick, bool running) {
+  fake_host *f = ctx;
+  if (R.n < 256) {
+    R.tick[R.n] = tick;
+    R.running[R.n] = running;
+    R.n_cmd_at[R.n] = f->n_cmd;
+    R.n++;
+  }
+}
+
+static void test_sched__reports_each_ticks_slice_to_the_controller(void **state) {
+  memset(&R, 0, sizeof R);
+  H.tick_done = record_tick_done;
+  F.s.tick = 10;  // a controller that has run a while
+  uint64_t start = F.s.tick;
+  must_run("def p():\n"
+           "  i = 0\n"
+           "  while i < 5:\n"
+           "    set_standard_digital_out(i, True)\n"
+           "    sync()\n"
+           "    i = i + 1\n"
+           "  end\n"
+           "end\n");
+  assert_true(R.n >= 7);
+  assert_true(R.running[0]);
+  assert_int_equal(R.tick[0], start - 1);
+  assert_int_equal(R.n_cmd_at[0], 0);
+  for (int k = 1; k < R.n - 1; k++) {
+    assert_true(R.running[k]);
+    assert_int_equal(R.tick[k], start + (uint64_t)(k - 1));
+    if (k <= 5) {
+      assert_int_equal(R.n_cmd_at[k], k);  // tick k-1's output is submitted before its report
+    }
+  }
+  assert_false(R.running[R.n - 1]);
+  int n = R.n;
+  assert_int_equal(run_text("sec s():\n  set_standard_digital_out(1, False)\nend\n", 0), 0);
+  assert_int_equal(R.n, n);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup(test_sched__threads_interleave_one_tick_per_wait, setup),
@@ -312,6 +361,7 @@ int main(void) {
       cmocka_unit_test_setup(test_sched__error_in_a_thread_stops_every_thread, setup),
       cmocka_unit_test_setup(test_sched__recursion_limit_in_a_thread, setup),
       cmocka_unit_test_setup(test_sched__secondary_program_may_not_start_threads, setup),
+      cmocka_unit_test_setup(test_sched__reports_each_ticks_slice_to_the_controller, setup),
   };
   return cmocka_run_group_tests_name("net/urscript/script_sched", tests, NULL, NULL);
 }

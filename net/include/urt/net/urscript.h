@@ -82,6 +82,9 @@ typedef struct urt_script_host {
   /* Nullable: the snapshot of an earlier tick (get_actual_joint_positions_history); 0, or
    * nonzero when the controller no longer keeps it (or has not published it yet). */
   int (*snapshot_at)(void *ctx, uint64_t tick, urt_snapshot_t *out);
+  /* Nullable: a (main) program has run its slice of tick (running), or has ended (!running):
+   * the emulator keeps the output registers of each slice for that tick's RTDE package. */
+  void (*tick_done)(void *ctx, uint64_t tick, bool running);
 } urt_script_host_t;
 
 enum { URT_SCRIPT_REG_INT = 0, URT_SCRIPT_REG_DOUBLE = 1, URT_SCRIPT_REG_BIT = 2 };
