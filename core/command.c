@@ -2,6 +2,7 @@
  * core/command.c — the only door from commands into the physics: every value is checked
  * before it can reach the state, as a real controller refuses a target it cannot follow. */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "step_internal.h"
@@ -63,4 +64,25 @@ void urt_pstop_reset(const urt_model_t *m, urt_data_t *d) {
   (void)m;
   d->pstop = 0;
   urt__command_hold(d);
+}
+
+const char *urt_pstop_text(uint32_t bits, char *buf, size_t n) {
+  static const char *const names[] = {"non-finite command", "position limit", "speed limit",
+                                      "acceleration limit", "torque limit",
+                                      "non-finite state"};
+  size_t used = 0;
+  if (n == 0) {
+    return buf;
+  }
+  buf[0] = '\0';
+  for (int b = 0; b < (int)(sizeof names / sizeof names[0]); b++) {
+    if (bits & (1u << b)) {
+      int k = snprintf(buf + used, n - used, "%s%s", used ? ", " : "", names[b]);
+      used = k < 0 ? used : used + (size_t)k < n ? used + (size_t)k : n - 1;
+    }
+  }
+  if (used == 0) {
+    snprintf(buf, n, "none");
+  }
+  return buf;
 }

@@ -457,17 +457,8 @@ struct Sim {
 
 // Names of the protective-stop bits, for the message when a command is refused.
 std::string pstop_text(uint32_t bits) {
-  static const char *const names[] = {"non-finite command", "position limit", "speed limit",
-                                      "acceleration limit", "torque limit",
-                                      "non-finite state"};
-  std::string s;
-  for (int b = 0; b < 6; b++) {
-    if (bits & (1u << b)) {
-      s += s.empty() ? "" : ", ";
-      s += names[b];
-    }
-  }
-  return s.empty() ? "none" : s;
+  char buf[160];
+  return urt_pstop_text(bits, buf, sizeof buf);
 }
 
 // Output paths of --compare: PATH.csv → PATH.{fixed,reference}.csv, else a directory.

@@ -102,17 +102,8 @@ std::vector<Channel> make_channels() {
 int truth_offset(const std::vector<Channel> &ch) { return ch[CH_COUNT].offset; }
 
 std::string pstop_text(uint32_t bits) {
-  static const char *const names[] = {"non-finite command", "position limit", "speed limit",
-                                      "acceleration limit", "torque limit",
-                                      "non-finite state"};
-  std::string s;
-  for (int b = 0; b < 6; b++) {
-    if (bits & (1u << b)) {
-      s += s.empty() ? "" : ", ";
-      s += names[b];
-    }
-  }
-  return s.empty() ? "none" : s;
+  char buf[160];
+  return urt_pstop_text(bits, buf, sizeof buf);
 }
 
 void put6(double *row, const std::vector<Channel> &ch, int c, const double *v) {

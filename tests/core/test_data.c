@@ -2,6 +2,7 @@
  * tests/core/test_data.c — core/data.cpp: the eq. (6) start under gravity. */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "test_model.h"
 #include "test_support.h"
@@ -69,11 +70,26 @@ static void test_data_init__current_offset_shows_in_the_measurement_only(void **
   urt_model_free(m0);
 }
 
+// The causes in bit order, "none" without any, and a short buffer cut, never overrun
+static void test_pstop_text__names_the_causes_in_order(void **state) {
+  (void)state;
+  char buf[64];
+  assert_string_equal(urt_pstop_text(0, buf, sizeof buf), "none");
+  assert_string_equal(urt_pstop_text(URT_PSTOP_SPEED_LIMIT | URT_PSTOP_POS_LIMIT, buf, sizeof buf),
+                      "position limit, speed limit");
+  char small[12];
+  memset(small, 'x', sizeof small);
+  urt_pstop_text(URT_PSTOP_NONFINITE_CMD | URT_PSTOP_TORQUE_LIMIT, small, sizeof small);
+  assert_int_equal(strlen(small), sizeof small - 1);
+  assert_memory_equal(small, "non-finite ", sizeof small - 1);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_data_init__start_at_rest_under_gravity_does_not_move),
       cmocka_unit_test(test_data_init__shoulder_holds_with_3_913_A_at_q0),
       cmocka_unit_test(test_data_init__current_offset_shows_in_the_measurement_only),
+      cmocka_unit_test(test_pstop_text__names_the_causes_in_order),
   };
   return cmocka_run_group_tests_name("core/data", tests, NULL, NULL);
 }

@@ -18,10 +18,8 @@ if not list((ROOT / "python" / "urtwin").glob("_urtwin*.so")):
     pytest.fail("python/urtwin/_urtwin*.so is not built: run make build", pytrace=False)
 
 
-def test_demo_on_a_tiny_dataset(tmp_path):
-    (tmp_path / "s.yaml").write_text(
-        "duration: 0.6\ntrajectories: [excitation]\nseeds: [1, 2, 3, 4]\n"
-        "splits: {train: [1, 2], test: [3, 4]}\n")
+def sweep_and_demo(tmp_path):
+    """The sweep tmp_path/s.yaml in-process, then tools/dataset_demo.py on it: its table."""
     env = dict(os.environ, PYTHONPATH=str(ROOT / "python"))
     res = subprocess.run([sys.executable, "-m", "urtwin.dataset", tmp_path / "s.yaml", "--out",
                           tmp_path / "data", "--no-ray", "--quiet"], env=env,
@@ -31,7 +29,14 @@ def test_demo_on_a_tiny_dataset(tmp_path):
                           "--sweep", tmp_path / "s.yaml", "--out", tmp_path / "demo"], env=env,
                          capture_output=True, text=True, check=False, timeout=300)
     assert res.returncode == 0, res.stderr
-    table = (tmp_path / "demo" / "detector.md").read_text()
+    return (tmp_path / "demo" / "detector.md").read_text()
+
+
+def test_demo_on_a_tiny_dataset(tmp_path):
+    (tmp_path / "s.yaml").write_text(
+        "duration: 0.6\ntrajectories: [excitation]\nseeds: [1, 2, 3, 4]\n"
+        "splits: {train: [1, 2], test: [3, 4]}\n")
+    table = sweep_and_demo(tmp_path)
     # the train runs set the threshold, so none of them is above 1.2 times it
     assert re.search(r"\| excitation \| train \| healthy \| - \| 0 / 2 \|", table), table
     assert re.search(r"\| excitation \| test \| healthy \| - \| [0-2] / 2 \|", table), table
@@ -50,16 +55,7 @@ def test_demo_on_a_tiny_faulted_dataset(tmp_path):
         "splits: {train: [1], test: [2]}\nfaults:\n  - healthy\n"
         "  - {name: current_offset, faults: [{class: current_offset, joint: 1, severity: 0.5,"
         " unit: A, profile: {kind: step, onset: 0.0}}], severities: [0.5]}\n")
-    env = dict(os.environ, PYTHONPATH=str(ROOT / "python"))
-    res = subprocess.run([sys.executable, "-m", "urtwin.dataset", tmp_path / "s.yaml", "--out",
-                          tmp_path / "data", "--no-ray", "--quiet"], env=env,
-                         capture_output=True, text=True, check=False, timeout=300)
-    assert res.returncode == 0, res.stderr
-    res = subprocess.run([sys.executable, ROOT / "tools" / "dataset_demo.py", tmp_path / "data",
-                          "--sweep", tmp_path / "s.yaml", "--out", tmp_path / "demo"], env=env,
-                         capture_output=True, text=True, check=False, timeout=300)
-    assert res.returncode == 0, res.stderr
-    table = (tmp_path / "demo" / "detector.md").read_text()
+    table = sweep_and_demo(tmp_path)
     assert re.search(r"\| excitation \| train \| healthy \| - \| 0 / 1 \|", table), table
     for split in ("train", "test"):
         assert re.search(rf"\| excitation \| {split} \| current_offset \| 0\.5 \| 1 / 1 \|",

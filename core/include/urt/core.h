@@ -89,6 +89,10 @@ int urt_command_set(const urt_model_t *m, urt_data_t *d, const urt_command_t *cm
  * Context: RT. */
 void urt_pstop_reset(const urt_model_t *m, urt_data_t *d);
 
+/* The protective-stop causes of bits (URT_PSTOP_*) as text, "position limit, speed limit", or
+ * "none", into buf (always NUL-terminated when n > 0). Returns buf. Context: any. */
+const char *urt_pstop_text(uint32_t bits, char *buf, size_t n);
+
 //---- step ----
 
 /* Advance the simulation by exactly m->dt with the fixed-step ROS2 scheme (model.md §5.3);
