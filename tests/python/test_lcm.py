@@ -4,6 +4,7 @@ types lcm-gen wrote into the build tree (build/net/lcm/python). Traffic stays on
 (ttl=0); each emulator gets its own udpm port and channel prefix, so parallel runs never cross.
 Numbers are printed (pytest -s)."""
 
+import importlib.util
 import itertools
 import math
 import os
@@ -22,7 +23,16 @@ import lcm  # pinned in tools/requirements.txt
 LCM_TYPES = os.path.join(BUILD, "net", "lcm", "python")
 if not os.path.isdir(os.path.join(LCM_TYPES, "urtwin")):  # make build generates them
     pytest.fail(f"{LCM_TYPES} has no generated LCM types: run make build", pytrace=False)
-sys.path.insert(0, LCM_TYPES)
+
+
+def lcm_type(name):
+    """A generated LCM type, loaded from its file: the generated package is named `urtwin`
+    (the .lcm files' package), which the Python package `import urtwin` shadows on sys.path."""
+    path = os.path.join(LCM_TYPES, "urtwin", f"{name}.py")
+    spec = importlib.util.spec_from_file_location(f"urtwin_lcm_types.{name}", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return getattr(mod, name)
 
 _runs = itertools.count()
 
@@ -38,7 +48,8 @@ class Listener:
     """Decodes status and drive messages on a thread; keeps them all."""
 
     def __init__(self, url, prefix):
-        from urtwin import lcmt_urtwin_drive, lcmt_urtwin_status
+        lcmt_urtwin_drive, lcmt_urtwin_status = (lcm_type("lcmt_urtwin_drive"),
+                                                 lcm_type("lcmt_urtwin_status"))
         self.lc = lcm.LCM(url)
         self.status, self.drive = [], []
         self.lock = threading.Lock()
@@ -82,7 +93,7 @@ class Listener:
 
 
 def command(q, qd=None, tau=None):
-    from urtwin import lcmt_urtwin_command
+    lcmt_urtwin_command = lcm_type("lcmt_urtwin_command")
     c = lcmt_urtwin_command()
     c.utime = int(time.time() * 1e6)
     c.num_joints, c.joint_position = 6, list(q)
@@ -238,7 +249,7 @@ def test_lcm_lockstep_one_tick_per_command():
 
 
 def io_message(digital_mask=0, digital_levels=0, analog_mask=0, analog=(0.0, 0.0, 0.0, 0.0)):
-    from urtwin import lcmt_urtwin_io
+    lcmt_urtwin_io = lcm_type("lcmt_urtwin_io")
     m = lcmt_urtwin_io()
     m.utime = int(time.monotonic() * 1e6)
     m.digital_mask, m.digital_levels, m.analog_mask = digital_mask, digital_levels, analog_mask

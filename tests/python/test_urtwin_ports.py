@@ -107,7 +107,9 @@ def test_ports_survive_garbage_and_clients_that_never_read():
         drift = clock_drift(packets, window=0.5)
         print(f"\n{len(packets)} packets in 3 s next to 3 idle readers and 4 garbage writers, "
               f"{len(bad)} irregular steps, controller clock drift {drift * 1e3:+.2f} ms")
-        assert bad == [] and abs(drift) <= 0.002 and 0.99 * 1500 <= len(packets) <= 1503
+        # the count is loose both ways (1 %): a reader preempted early finds a backlog that it
+        # counts inside its 3 s, one preempted late misses some; the drift is the tight check
+        assert bad == [] and abs(drift) <= 0.002 and 0.99 * 1500 <= len(packets) <= 1.01 * 1500
         for s in idle:
             s.close()
         assert emu.alive()
