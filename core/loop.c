@@ -69,7 +69,7 @@ struct urt_loop {
 
   /* statistics */
   _Atomic uint64_t overruns, missed_periods;
-  _Atomic uint64_t exec_last_ns, exec_max_ns;
+  _Atomic uint64_t exec_last_ns;
   urt_exec_hist_t exec_hist;        /* wall time of each period's work             */
   urt_exec_hist_t cpu_hist;         /* the thread's CPU time per period            */
   _Atomic uint64_t refined_steps;   /* copy of d.refined_count for other threads   */
@@ -321,7 +321,7 @@ void urt_loop_get_stats(const urt_loop_t *l, urt_loop_stats_t *out) {
   out->missed_periods = atomic_load(&l->missed_periods);
   out->cmd_dropped = dropped;
   out->exec_last = atomic_load(&l->exec_last_ns) * 1e-9;
-  out->exec_max = atomic_load(&l->exec_max_ns) * 1e-9;
+  out->exec_max = urt_exec_hist_max(&l->exec_hist);  // the histogram keeps the exact maximum
   out->exec_p50 = urt_exec_hist_quantile(&l->exec_hist, 0.50);
   out->exec_p99 = urt_exec_hist_quantile(&l->exec_hist, 0.99);
   out->exec_p999 = urt_exec_hist_quantile(&l->exec_hist, 0.999);
@@ -491,9 +491,6 @@ static void *physics_main(void *arg) {
     int64_t exec = busy + (end - start);
     publish_snapshot(l, tick, exec);
     atomic_store_explicit(&l->exec_last_ns, (uint64_t)exec, memory_order_relaxed);
-    if ((uint64_t)exec > atomic_load_explicit(&l->exec_max_ns, memory_order_relaxed)) {
-      atomic_store_explicit(&l->exec_max_ns, (uint64_t)exec, memory_order_relaxed);
-    }
     // wall time counts what preempted the thread too; its CPU time (this period's work and the
     // previous period's pacing, which costs next to nothing) is the work alone
     urt_exec_hist_add(&l->exec_hist, (uint64_t)exec);

@@ -300,7 +300,8 @@ static void test_sched__secondary_program_may_not_start_threads(void **state) {
   urt__us_prog_free(p);
 }
 
-/* the controller waits for each tick's slice (urt_loop_script_tick): the VM reports every tick
+/* the host learns of each tick's slice (tick_done: the emulator keeps that slice's RTDE
+ * registers for the tick's package, port_rtde.c): the VM reports every tick
  * it processed, in order, after that tick's commands, first the tick before its first slice,
  * and at the end that no program runs; a secondary program reports nothing */
 static struct {
