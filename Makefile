@@ -145,6 +145,15 @@ urcl: deps
 	    || { tail -40 build/urcl/build.log; exit 1; }; \
 	  touch build/urcl/.stamp; echo "URCL: built in $$(( $$(date +%s) - t0 )) s"; \
 	fi
+	@if [ -f build/urcl/.stamp ]; then $(MAKE) --no-print-directory $(URCL_OURS); fi
+
+# our own programs on URCL's public API (run by run_urcl.py as urtwin/<name>), linked against
+# the URCL just built; its headers are read from ../shared, nothing is copied
+URCL_OURS := build/urcl/ours/ros2_driver_pattern
+build/urcl/ours/%: tests/urcl/%.cpp build/urcl/.stamp
+	@mkdir -p $(dir $@)
+	$(CXX) -std=c++17 -O2 -Wall -Wextra -I"$(URCL_SRC)/include" $< -o $@ \
+	  -L$(URCL_BUILD) -lurcl -Wl,-rpath,$(abspath $(URCL_BUILD)) -pthread
 
 # the judges of issue 9. test-urcl (in make test) runs the tests of tests/urcl/expected_pass.txt
 # and fails if one does not pass: bounded time, since a test that does not pass yet can hang

@@ -100,6 +100,15 @@ EXAMPLES = [
     ("script_sender_example", ["2"], 30),  # no robot involved: a server on 50002 for 2 s
 ]
 
+# our own programs on URCL's public API (tests/urcl/*.cpp, built by `make urcl` into
+# build/urcl/ours/): arguments after the robot address, timeout [s], the versions they run on
+OURS = [
+    # the UR ROS 2 driver's calls (external_control.md §5.1): e-Series, 500 Hz; 30 s of servoj.
+    # Its control loop runs at SCHED_FIFO 50 where permitted, as ros2_control's does on a real
+    # robot: a 10 ms receive timeout ends the program if the client is descheduled that long
+    ("ros2_driver_pattern", ["resources/external_control.urscript", "30"], 120, ("e-series",)),
+]
+
 PORTS = (30001, 30002, 30003, 30004, 29999)
 
 
@@ -495,6 +504,23 @@ def run_version(args, name):
                 known = match(patterns, test_id, "known")
                 if known and status != "passed":
                     rec["known"] = known
+                after(test_id, rec)
+            ours = os.path.join(os.path.dirname(os.path.abspath(args.build)), "ours")
+            rt = ["chrt", "-f", "50"] if realtime_permitted() else []
+            for prog, extra, timeout, versions in OURS:
+                test_id = f"urtwin/{prog}"
+                if name not in versions or (filt and not filt.search(test_id)):
+                    continue
+                if only is not None and test_id not in only:
+                    continue
+                lpath = os.path.join(logs, f"urtwin_{prog}.log")
+                rc, secs = run_bounded([*rt, os.path.join(ours, prog), ROBOT_IP, *extra], work,
+                                       timeout, lpath)
+                status = "passed" if rc == 0 else "timeout" if rc is None else "failed"
+                rec = {"status": status, "seconds": round(secs, 2)}
+                if rc != 0:
+                    rec["message"] = (f"killed after {timeout} s" if rc is None else
+                                      f"exit {rc}") + "; " + last_lines(lpath)
                 after(test_id, rec)
     finally:
         robot.stop()
