@@ -10,7 +10,8 @@
 #               running emulator: 30003 jitter with 8 clients, overruns, memory (bench_ports.json),
 #               DDS off vs on with 8 subscribers: latency tick -> subscriber, overruns (bench_dds.json),
 #               the physics thread's time per period idle and under movel + a command flood
-#               (bench_physics_worst.json)
+#               (bench_physics_worst.json), the URScript VM's cost per tick running URCL's
+#               script in SERVOJ mode beside the physics' overruns (bench_urcl_vm.json; needs URCL)
 
 SHELL := /bin/bash
 JOBS ?= $(shell nproc)
@@ -166,11 +167,12 @@ urcl-report: build urcl
 	$(PY) tests/urcl/run_urcl.py --src "$(URCL_SRC)" -v
 
 # ---- benchmarks and tools --------------------------------------------------------------
-bench: build
+bench: build urcl
 	URT_BUILD=$(abspath build) $(PY) tools/bench.py --out build/bench.json
 	URT_BUILD=$(abspath build) $(PY) tools/bench_ports.py --out build/bench_ports.json
 	URT_BUILD=$(abspath build) $(PY) tools/bench_dds.py --out build/bench_dds.json
 	URT_BUILD=$(abspath build) $(PY) tools/bench_physics_worst.py --out build/bench_physics_worst.json
+	URT_BUILD=$(abspath build) $(PY) tools/bench_urcl_vm.py --out build/bench_urcl_vm.json
 
 # the full 10 s excitation comparison against CVODE, noise off, at 20 and 10 kHz (slow: about
 # 7 minutes each on one core)

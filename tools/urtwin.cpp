@@ -539,6 +539,13 @@ int main(int argc, char** argv) {
   }
   urt_emulator_stop(emu);
   urt_loop_stop(loop);
+  urt_emulator_stats_t es;
+  urt_emulator_get_stats(emu, &es);
+  std::fprintf(stderr,
+               "urtwin: urscript per tick: cpu p50 %.1f us p99 %.1f us p99.9 %.1f us max %.1f us "
+               "over %llu ticks\n",
+               es.script_tick.p50 * 1e6, es.script_tick.p99 * 1e6, es.script_tick.p999 * 1e6,
+               es.script_tick.max * 1e6, (unsigned long long)es.script_tick.ticks);
   urt_loop_stats_t s;
   urt_loop_get_stats(loop, &s);
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",

@@ -548,6 +548,11 @@ void urt_emulator_get_stats(const urt_emulator_t *e, urt_emulator_stats_t *out) 
   out->refused_fds = atomic_load(&e->refused_fds);
   out->out_bytes = atomic_load(&e->out_bytes);
   out->out_refused = atomic_load(&e->out_refused);
+  if (e->runner) {
+    urt_runner_tick_stats(e->runner, &out->script_tick);
+  } else {
+    memset(&out->script_tick, 0, sizeof out->script_tick);
+  }
 }
 
 int urt_emulator_shutdown_requested(const urt_emulator_t *e) {

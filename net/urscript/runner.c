@@ -49,6 +49,7 @@ struct urt_runner {
   _Atomic int state;       /* URT_PROGRAM_*                         */
   uint64_t motion_id;      /* runner thread only                    */
   us_sockets *sockets;     /* the main program's sockets (runner thread only) */
+  urt_exec_hist_t tick_cpu;  /* main programs' VM work per tick (runner thread writes) */
   /* the running main program (runner thread only) */
   uint64_t cur_seq, cur_stop;
 };
@@ -158,7 +159,7 @@ static void run_main(urt_runner_t *r, const unit *u) {
   emit_key(r, "PROGRAM_XXX_STARTED", p->name);
   us_hooks h = {.host = &r->host, .sockets = r->sockets, .motion_id = &r->motion_id,
                 .step_budget = r->cfg.step_budget, .wait_timeout_ms = r->cfg.wait_timeout_ms,
-                .poll = poll_main, .poll_ctx = r};
+                .poll = poll_main, .poll_ctx = r, .tick_cpu = &r->tick_cpu};
   p->secondary = false;
   if (urt__us_run(p, &h, &e) != 0) {
     report(r, &e, false);
@@ -365,4 +366,12 @@ void urt_runner_destroy(urt_runner_t *r) {
   pthread_mutex_destroy(&r->mu);
   urt__us_sockets_free(r->sockets);
   free(r);
+}
+
+void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out) {
+  out->p50 = urt_exec_hist_quantile(&r->tick_cpu, 0.50);
+  out->p99 = urt_exec_hist_quantile(&r->tick_cpu, 0.99);
+  out->p999 = urt_exec_hist_quantile(&r->tick_cpu, 0.999);
+  out->max = urt_exec_hist_max(&r->tick_cpu);
+  out->ticks = urt_exec_hist_count(&r->tick_cpu);
 }

@@ -9,6 +9,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "urt/exec_hist.h"
 #include "urt/net/urscript.h"
 
 //---- arena ----
@@ -133,6 +134,10 @@ typedef struct us_hooks {
   /* called after every wait_tick: nonzero cancels the program (US_ERR_CANCEL). Nullable. */
   int (*poll)(void *ctx);
   void *poll_ctx;
+  /* each controller tick's VM work [ns of the runner thread's CPU time]: the service thread,
+   * every URScript thread's slice and the switches, from the wait's return to the next wait
+   * (what `make bench` reports). Single writer: the runner thread. Nullable. */
+  urt_exec_hist_t *tick_cpu;
 } us_hooks;
 
 /* Run a parsed program to its end. Returns 0, or -1 with err filled. Context: the runner

@@ -27,6 +27,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <time.h>
 #include <ucontext.h>
 
 #include "script_vm.h"
@@ -364,6 +365,13 @@ static void run_tick(us_sched *S) {
   reap(S);
 }
 
+/* the calling thread's CPU time [ns]: a tick's VM cost without the time the OS ran others */
+static uint64_t thread_cpu_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
 /* wait for the controller's next tick and take it (tick + 1, even if the host is further:
  * a late runner catches up tick by tick). Nonzero when the program is cancelled. */
 static int next_tick(us_sched *S) {
@@ -426,12 +434,16 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
     tick_done(h->host->ctx, S->tick > 0 ? S->tick - 1 : 0, true);
   }
   for (;;) {
+    const uint64_t cpu0 = h->tick_cpu ? thread_cpu_ns() : 0;
     if (!p->secondary && urt__us_service_tick(&S->service, h, err) != X_OK) {
       break;  // the watchdog fired: the program stops with its message
     }
     run_tick(S);
     if (tick_done) {
       tick_done(h->host->ctx, S->tick, true);
+    }
+    if (h->tick_cpu) {
+      urt_exec_hist_add(h->tick_cpu, thread_cpu_ns() - cpu0);
     }
     if (program_over(S)) {
       break;

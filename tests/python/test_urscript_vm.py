@@ -3,6 +3,7 @@
 thread that loops without yielding gets UR's runtime error, the program stops, and every port
 keeps serving (net/urscript/script_sched.c)."""
 
+import re
 import socket
 import time
 
@@ -110,3 +111,27 @@ def test_two_threads_run_side_by_side_and_join():
         assert "joined 2" in texts
         assert ("PROGRAM_XXX_STOPPED", "two") in keys
         assert not [m for m in msgs if m["type"] == 10]
+
+
+def test_vm_cost_per_tick_is_counted_for_every_tick_of_a_program():
+    """urtwin's exit line "urscript per tick": one sample per controller tick a main program ran
+    (tools/bench_urcl_vm.py reads it under URCL's script)"""
+    ticks = 100
+    prog = (f"def counted():\n  i = 0\n  while i < {ticks}:\n    sync()\n    i = i + 1\n  end\n"
+            '  textmsg("counted done")\nend\n')
+    with Emulator() as emu:
+        with PrimaryReader(emu.host, 30001) as pr:
+            pr.read()
+            emu.send_script(prog, port=30001)
+            msgs = pr.robot_messages(1.5)
+        assert any("counted done" in m.get("text", "") for m in msgs if m["type"] == 0)
+    log = emu.err.decode(errors="replace")
+    m = re.search(r"urscript per tick: cpu p50 ([\d.]+) us p99 ([\d.]+) us p99\.9 ([\d.]+) us "
+                  r"max ([\d.]+) us over (\d+) ticks", log)
+    assert m, log[-800:]
+    p50, p99, p999, mx = map(float, m.groups()[:4])
+    n = int(m.group(5))
+    print(f"\n{m.group(0)}")
+    # the slice of the program's first tick, then one per sync()
+    assert n == ticks + 1
+    assert 0 < p50 <= p99 <= p999 <= mx

@@ -15,6 +15,7 @@
 #include <stdint.h>
 
 #include "urt/loop.h"
+#include "urt/net/urscript.h"
 #include "urt/net/version.h"
 
 #ifdef __cplusplus
@@ -67,6 +68,7 @@ typedef struct urt_emulator_stats {
   uint64_t refused_fds;      /* connections closed at once: no descriptor left (EMFILE) */
   uint64_t out_bytes;        /* output buffers allocated now, all clients            */
   uint64_t out_refused;      /* buffer growths refused for the output budget          */
+  urt_runner_tick_stats_t script_tick;  /* the URScript VM's CPU time per tick (urscript.h) */
 } urt_emulator_stats_t;
 
 typedef struct urt_emulator urt_emulator_t;

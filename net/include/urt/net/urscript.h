@@ -132,6 +132,15 @@ bool urt_runner_wait_idle(urt_runner_t *r, int timeout_ms);
 /* Stop everything, join the thread, free. Nullable: r. Context: non-RT. */
 void urt_runner_destroy(urt_runner_t *r);
 
+/* The main programs' VM work per controller tick so far: the runner thread's CPU time from a
+ * wait's return to its next wait (the service thread, every URScript thread's slice, the
+ * switches), as quantiles and maximum [s]; 0 before the first tick. Context: any thread. */
+typedef struct urt_runner_tick_stats {
+  double p50, p99, p999, max;
+  uint64_t ticks;
+} urt_runner_tick_stats_t;
+void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out);
+
 /* Parse and name-check one unit without running it. On failure msg (nullable) receives the
  * RUNTIME_EXCEPTION the runner would report. Context: any. Returns 0 or URT_EINVAL. */
 int urt_script_check(const char *text, size_t len, urt_script_msg_t *msg);
