@@ -2,9 +2,9 @@
  * tests/net/urscript/socket_fixture.h — a scripted TCP peer on 127.0.0.1 (an ephemeral port)
  * for the URScript socket tests: it accepts the program's connection and, at given controller
  * ticks of the fake host, writes given bytes or closes, so that data arrives in parts over
- * several ticks. It runs inside the fake host's wait_tick (the program's thread), and after
- * each write waits until the kernel shows the bytes on the program's side, so the tick at which
- * a read completes is exact. */
+ * several ticks, or echoes what the program sent. It runs inside the fake host's wait_tick (the
+ * program's thread), and after each write waits until the kernel shows the bytes on the
+ * program's side, so the tick at which a read completes is exact. */
 #ifndef URT_TEST_SOCKET_FIXTURE_H
 #define URT_TEST_SOCKET_FIXTURE_H
 
@@ -40,6 +40,7 @@ typedef struct fixture {
   us_sockets *table;   /* the program's sockets: where the client side is */
   char got[4096];      /* what the program sent */
   size_t n_got;
+  bool echo;           /* send back what the program sent, in the tick it is seen */
 } fixture;
 
 static inline int fix_listen(fixture *x) {
@@ -97,33 +98,43 @@ static inline void fix_drain(fixture *x) {
   x->got[x->n_got] = 0;
 }
 
+/* write to the program and wait until the kernel shows the bytes on its side */
+static inline void fix_send(fixture *x, const char *data, size_t len) {
+  int client = fix_client_fd(x);
+  int before = 0;
+  ioctl(client, FIONREAD, &before);
+  if (send(x->conn_fd, data, len, MSG_NOSIGNAL) != (ssize_t)len) {
+    return;
+  }
+  for (int w = 0; w < 1000; w++) {
+    int now = 0;
+    ioctl(client, FIONREAD, &now);
+    if (now >= before + (int)len) break;
+    usleep(1000);
+  }
+}
+
 /* what happens at the fake host's tick t */
 static inline void fix_tick(fixture *x, uint64_t t) {
   if (x->conn_fd < 0) {
     x->conn_fd = accept4(x->listen_fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
   }
+  const size_t seen = x->n_got;
   fix_drain(x);
+  if (x->echo && x->conn_fd >= 0 && x->n_got > seen) {
+    fix_send(x, x->got + seen, x->n_got - seen);
+  }
   for (int k = 0; k < x->n_ev; k++) {
     if (x->ev[k].tick != t || x->conn_fd < 0) continue;
-    int client = fix_client_fd(x);
     if (!x->ev[k].data) {
+      int client = fix_client_fd(x);
       close(x->conn_fd);
       x->conn_fd = -1;
       struct pollfd p = {.fd = client, .events = POLLRDHUP};
       poll(&p, 1, 1000);  // the FIN is there before the program looks
       continue;
     }
-    int before = 0;
-    ioctl(client, FIONREAD, &before);
-    if (send(x->conn_fd, x->ev[k].data, x->ev[k].len, MSG_NOSIGNAL) != (ssize_t)x->ev[k].len) {
-      continue;
-    }
-    for (int w = 0; w < 1000; w++) {
-      int now = 0;
-      ioctl(client, FIONREAD, &now);
-      if (now >= before + (int)x->ev[k].len) break;
-      usleep(1000);
-    }
+    fix_send(x, x->ev[k].data, x->ev[k].len);
   }
 }
 

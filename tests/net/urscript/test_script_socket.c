@@ -2,7 +2,10 @@
  * tests/net/urscript/test_script_socket.c — the URScript socket builtins against a scripted
  * peer on 127.0.0.1 (socket_fixture.h) and a fake controller: each read with its data arriving
  * in parts over several ticks, timeouts counted in ticks, a peer that closes, sends as the
- * peer receives them, a refused host. */
+ * peer receives them, a refused host; and determinism (issue 9): two threads, one exchanging
+ * with an echo peer each tick, give the same per-tick command stream in every run, also with the
+ * runner late. The echo answers inside the fake host's wait, so the replies arrive at the same
+ * ticks each run: what varies is only the OS's timing, which must change nothing. */
 #define _GNU_SOURCE
 #include <pthread.h>
 #include <math.h>
@@ -310,9 +313,85 @@ static void test_socket__no_table_is_a_runtime_error(void **state) {
   urt__us_prog_free(p);
 }
 
+/* two threads, one of them asking an echo peer for each servoj target: the program the issue's
+ * determinism check names */
+static const char kEchoThreads[] =
+    "def echo_two():\n"
+    "  global total = 0\n"
+    "  thread io():\n"
+    "    k = 0\n"
+    "    while k < 10:\n"
+    "      set_standard_digital_out(k %% 8, k %% 2 == 0)\n"
+    "      sleep(0.006)\n"
+    "      k = k + 1\n"
+    "    end\n"
+    "  end\n"
+    "  t = run io()\n"
+    "  socket_open(\"127.0.0.1\", %d, \"echo\")\n"
+    "  i = 0\n"
+    "  while i < 20:\n"
+    "    socket_send_line(str_cat(str_cat(\"(\", i), str_cat(\",\", str_cat(0.5 * i, \")\"))), \"echo\")\n"
+    "    v = socket_read_ascii_float(2, \"echo\")\n"
+    "    servoj([v[1], v[2], 0, 0, 0, 0], t=0.002)\n"
+    "    total = total + v[1]\n"
+    "    i = i + 1\n"
+    "  end\n"
+    "  join t\n"
+    "  set_standard_digital_out(7, total == 190)\n"
+    "end\n";
+
+/* FNV-1a over each command (kind, index, value, q, t) and the VM tick it came in */
+static uint64_t stream_hash(void) {
+  uint64_t h = 1469598103934665603ull;
+  for (int k = 0; k < F.n_cmd; k++) {
+    const urt_ctrl_cmd_t *c = &F.cmd[k];
+    double v[9] = {(double)c->kind, (double)c->index, c->value, c->t,
+                   c->q[0], c->q[1], c->q[2], (double)F.cmd_vm_tick[k], 0};
+    const unsigned char *b = (const unsigned char *)v;
+    for (size_t j = 0; j < sizeof v; j++) h = (h ^ b[j]) * 1099511628211ull;
+  }
+  return h;
+}
+
+static void test_socket__echo_and_threads_give_the_same_stream_every_run(void **state) {
+  X.echo = true;
+  must_run(kEchoThreads);
+  const uint64_t first = stream_hash();
+  const int n_first = F.n_cmd;
+  // the echoed targets drove servoj, one exchange per tick after the first
+  int servo = 0;
+  for (int k = 0; k < F.n_cmd; k++) {
+    if (F.cmd[k].kind == URT_CTRL_SERVOJ) {
+      assert_true(F.cmd[k].q[0] == servo && F.cmd[k].q[1] == 0.5 * servo);
+      servo++;
+    }
+  }
+  assert_int_equal(servo, 20);
+  const urt_ctrl_cmd_t *last = &F.cmd[F.n_cmd - 1];
+  assert_true(last->kind == URT_CTRL_SET_DIGITAL_OUT && last->index == 7 && last->value == 1);
+
+  // again, from scratch; then once more with the controller 1–4 ticks ahead at every wait and
+  // the runner descheduled meanwhile: the same commands at the same VM ticks
+  for (int run_k = 0; run_k < 2; run_k++) {
+    teardown(state);
+    setup(state);
+    X.echo = true;
+    if (run_k == 1) {
+      F.jump_seed = 4242;
+      F.tick_sleep_us = 200;
+    }
+    must_run(kEchoThreads);
+    assert_int_equal(F.n_cmd, n_first);
+    assert_true(stream_hash() == first);
+  }
+  print_message("echo + threads: %d commands, stream hash %016llx in three runs (one late)\n",
+                n_first, (unsigned long long)first);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_socket__binary_integers_in_parts_over_ticks, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__echo_and_threads_give_the_same_stream_every_run, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__timeout_counts_ticks_and_keeps_a_partial_record, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__byte_list_and_default_socket_name, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__ascii_floats_in_parts, setup, teardown),
