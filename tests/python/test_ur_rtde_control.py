@@ -4,20 +4,26 @@ rtde_control script is recognised on 30003 and run natively. The arm's motion is
 30003 stream; dynamics getters against the core's own functions (through liburtwin.so).
 Numbers are printed (pytest -s)."""
 
+import json
 import math
 import os
+import subprocess
+import sys
 import threading
 import time
+from pathlib import Path
 
 import pytest
 
 import built
 
 import urtwin_ctypes as urt
-from urtwin_proc import Emulator, RtReader, URTWIN
+from urtwin_proc import RT_ARGS, Emulator, RtReader, URTWIN
 
 import rtde_control
 import rtde_receive
+
+SERVO_CLIENT = Path(__file__).resolve().parent / "ur_rtde_servo_client.py"
 built.require(URTWIN)
 
 # the version whose pruned script keeps every command (direct torque and the dynamics getters
@@ -193,33 +199,45 @@ def test_movej_movel_ik_fk():
     assert s.irregular() == 0 and other.irregular() == 0 and len(other.ts) > 1000
 
 
-def test_servoj_sine_then_servo_stop():
-    period, lookahead, gain = 0.002, 0.1, 300
-    amp, freq = 0.2, 0.5
+def cpu_hogs(n):
+    """n busy processes at normal priority (killed by the caller)"""
+    return [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(n)]
+
+
+@pytest.mark.parametrize("hogs", [0, 2])
+def test_servoj_sine_tracks_with_the_lookahead_lag_then_servo_stop(hogs):
+    """ur_rtde's servoJ at 500 Hz (issue 9): the arm follows the command as the controller held
+    it one lookahead time late within 4 ms, with at most 1e-3 rad left after removing that lag,
+    also beside two busy processes. The gain and lookahead are URCL's and the ROS 2 driver's
+    (2000, 0.03 s); the sine is tests/urcl/ros2_driver_pattern's (0.2 rad, 0.2 Hz): servoj
+    smooths, so what is left after the lag grows with the sine's frequency (1.2e-3 rad at 0.5 Hz
+    here). Not met, and not run: without --rt-priority beside the hogs (1.4e-2 rad), because the
+    URScript thread, descheduled, hands the controller its servoj targets late, and the physics
+    thread must not wait for it."""
+    period, lookahead, gain = 0.002, 0.03, 2000
+    amp, freq, seconds = 0.2, 0.2, 5.0
+    rt_client = ["chrt", "-f", "50"] if RT_ARGS else []
     with Emulator() as emu:
         s = Stream(emu.host)
         # a second RTDE client reads back input_double_register_0, where ur_rtde writes the servoJ
         # target's base angle: the command as the controller held it, tick by tick
         other = RtdeStream(emu.host, extra=["input_double_register_0"])
-        c = rtde_control.RTDEControlInterface(emu.host)
-        time.sleep(0.05)
-        q0 = s.latest()["q_actual"]
-        # the controller time of each send, from ur_rtde's own C++ receive thread (no GIL)
-        clock = rtde_receive.RTDEReceiveInterface(emu.host, 500.0, ["timestamp"])
-        sent = []  # (controller time at send, commanded base angle)
-        for k in range(int(5.0 / period)):
-            t_cycle = c.initPeriod()
-            q = list(q0)
-            q[0] = q0[0] + amp * math.sin(2 * math.pi * freq * k * period)
-            sent.append((clock.getTimestamp(), q[0]))
-            c.servoJ(q, 0.5, 0.5, period, lookahead, gain)
-            c.waitPeriod(t_cycle)
-        c.servoStop()
-        time.sleep(1.0)
+        busy = cpu_hogs(hogs)
+        try:
+            r = subprocess.run([*rt_client, sys.executable, str(SERVO_CLIENT), emu.host,
+                                str(seconds), str(lookahead), str(gain), str(amp), str(freq)],
+                               capture_output=True, text=True, timeout=60)
+        finally:
+            for p in busy:
+                p.kill()
+                p.wait()
+        assert r.returncode == 0, r.stderr[-2000:]
+        sent = json.loads(r.stdout.strip().splitlines()[-1])
+        # the arm at rest after servoStop (the script's stop): 1 s of packets after it
+        t_end = time.monotonic() + 5
+        while s.latest()["time"] < sent[-1][0] + 1.2 and time.monotonic() < t_end:
+            time.sleep(0.01)
         rest = s.rest_speed()
-        c.stopScript()
-        c.disconnect()
-        clock.disconnect()
         s.close()
         other.close()
     import bisect
@@ -233,7 +251,7 @@ def test_servoj_sine_then_servo_stop():
 
         def command_at(t):
             return reference[max(bisect.bisect_right(ts, t) - 1, 0)][1]
-        mid = [p for p in s.packets if 1.5 < p["time"] - sent[0][0] < 4.0]
+        mid = [p for p in s.packets if 1.5 < p["time"] - sent[0][0] < seconds - 0.5]
 
         def residuals(lag):
             return [p["q_actual"][0] - command_at(p["time"] - lag) for p in mid]
@@ -242,18 +260,21 @@ def test_servoj_sine_then_servo_stop():
         return lag, max(abs(e) for e in residuals(lag))
 
     # the emulator's lag is judged from the command as it reached the controller (the register
-    # read-back): how late a Python client on a loaded machine sends is not the emulator's; the
-    # lag from the commands as sent (clock of ur_rtde's receive thread) is printed beside it
+    # read-back): how late a client sends is not the emulator's; the lag from the commands as
+    # sent (clock of ur_rtde's receive thread) is printed beside it
     held = [(v["timestamp"], v["input_double_register_0"]) for v in other.values
             if v["timestamp"] >= sent[0][0]]
     lag_held, res_held = best_lag(held)
     lag_sent, res_sent = best_lag(sent)
-    print(f"\nservoJ 0.5 Hz sine streamed by ur_rtde: lag {lag_held * 1e3:.0f} ms from the command "
-          f"as held by the controller (bound {(lookahead + 2 * period) * 1e3:.0f} ms), residual "
+    print(f"\nservoJ {freq} Hz sine streamed by ur_rtde ({hogs} CPU hogs, emulator "
+          f"{'real-time' if RT_ARGS else 'plain'}, client "
+          f"{'SCHED_FIFO' if rt_client else 'plain'}): lag {lag_held * 1e3:.0f} ms from the "
+          f"command as held by the controller (lookahead {lookahead * 1e3:.0f} ms), residual "
           f"{res_held:.2e} rad; lag {lag_sent * 1e3:.0f} ms from the command as sent, residual "
           f"{res_sent:.2e} rad; after servoStop |qd| {rest:.2e} rad/s; irregular steps: 30003 "
           f"{s.irregular()}, other RTDE client {other.irregular()} of {len(other.ts)}")
-    assert lag_held <= lookahead + 2 * period + 1e-9
+    assert abs(lag_held - lookahead) <= 0.004 + 1e-9
+    assert res_held <= 1e-3
     assert rest < 1e-3
     assert s.irregular() == 0 and other.irregular() == 0 and len(other.ts) > 2500
 
