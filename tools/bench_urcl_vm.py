@@ -22,13 +22,14 @@ import json
 import os
 import re
 import signal
-import socket
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tests" / "urcl"))
+from run_urcl import realtime_permitted, wait_port  # noqa: E402  (the URCL runner's, the same start)
 HOST = "127.0.0.2"
 URCL_DIR = Path("shared") / "clients" / "Universal_Robots_Client_Library-2.14.0"
 
@@ -45,25 +46,6 @@ def urcl_src():
     return None
 
 
-def realtime_permitted():
-    try:
-        return subprocess.run(["chrt", "-f", "1", "true"], capture_output=True,
-                              timeout=5).returncode == 0
-    except (OSError, subprocess.TimeoutExpired):
-        return False
-
-
-def wait_port(port, timeout=10.0):
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout:
-        try:
-            with socket.create_connection((HOST, port), timeout=0.2):
-                return True
-        except OSError:
-            time.sleep(0.02)
-    return False
-
-
 def run(build, seconds, driver=None, script=None):
     """One urtwin run; with driver, the ROS 2 pattern drives it for `seconds` of servoj."""
     args = [str(build / "tools" / "urtwin"), "--config", str(ROOT / "config" / "ur5.yaml"),
@@ -77,7 +59,7 @@ def run(build, seconds, driver=None, script=None):
         args += ["--rt-priority", "80"]
     emu = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     try:
-        if not wait_port(30004):
+        if not wait_port(HOST, 30004, 10.0):
             raise SystemExit("urtwin did not open its ports")
         client, client_rc = "", None
         if driver:

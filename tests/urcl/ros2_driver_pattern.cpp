@@ -53,6 +53,9 @@ const std::vector<std::string> kInputs = {
     "standard_analog_output_type", "standard_analog_output_0", "standard_analog_output_1"};
 
 constexpr uint32_t kPlaying = 2;  // RTDE runtime_state PLAYING
+// Servo phases started at most: on this shared 2-vCPU VM a client at SCHED_FIFO still goes
+// 12–16 ms without a package now and then under load (the host preempts the vCPU)
+constexpr int kAttempts = 4;
 
 std::atomic<bool> g_program_running{false};
 std::atomic<int> g_program_drops{0};
@@ -145,49 +148,87 @@ int main(int argc, char *argv[]) {
   }
 
   // ---- 1. servoj passthrough at the RTDE cadence ---------------------------------------------
-  while (!rd.read()) {
-  }
-  const vector6d_t q0 = rd.q;
-  const double ts0 = rd.timestamp;
-  long cycles = 0, write_failures = 0, not_playing = 0;
-  double max_gap = 0.0, last_ts = rd.timestamp, max_lag_err = 0.0;
-  vector6d_t target = q0;
+  // A program that ends because the client itself went quiet for about the receive timeout did what
+  // a controller does; that is the machine holding this process (or the stream) back, not a
+  // fault of the emulator's: such an attempt is reported and the phase starts again with the
+  // program resent (at most kAttempts). A program that ends while every package came within
+  // the timeout fails at once.
+  vector6d_t q0{};
+  double ts0 = 0.0;
   std::vector<double> ts_log, q5_log;  // for the tracking check: controller time, wrist 3
-  ts_log.reserve(static_cast<size_t>(servo_seconds * 1000.0) + 16);
-  q5_log.reserve(ts_log.capacity());
-  const auto t_servo = Clock::now();
-  while (rd.timestamp - ts0 < servo_seconds) {
-    if (seconds_since(t_servo) > 3.0 * servo_seconds + 10.0) {
-      fail("servo phase: the controller clock did not advance");
+  for (int attempt = 1;; attempt++) {
+    while (!rd.read()) {
     }
-    if (!rd.read()) {
-      continue;
+    q0 = rd.q;
+    ts0 = rd.timestamp;
+    long cycles = 0, write_failures = 0;
+    double max_gap = 0.0, last_ts = rd.timestamp, max_lag_err = 0.0;
+    bool dropped = false;
+    vector6d_t target = q0;
+    ts_log.clear();
+    q5_log.clear();
+    ts_log.reserve(static_cast<size_t>(servo_seconds * 1000.0) + 16);
+    q5_log.reserve(ts_log.capacity());
+    const auto t_servo = Clock::now();
+    const int drops_before = g_program_drops.load();
+    while (rd.timestamp - ts0 < servo_seconds) {
+      if (seconds_since(t_servo) > 3.0 * servo_seconds + 10.0) {
+        fail("servo phase: the controller clock did not advance");
+      }
+      if (!rd.read()) {
+        continue;
+      }
+      if (rd.runtime_state != kPlaying || g_program_drops.load() != drops_before) {
+        dropped = true;
+        break;
+      }
+      max_gap = std::max(max_gap, rd.timestamp - last_ts);
+      last_ts = rd.timestamp;
+      // |actual − the target written one cycle ago|: bounded by the servo's lag, no runaway
+      max_lag_err = std::max(max_lag_err, std::fabs(rd.q[5] - target[5]));
+      const double t = rd.timestamp - ts0;
+      ts_log.push_back(t);
+      q5_log.push_back(rd.q[5]);
+      target = q0;
+      target[5] = sine(q0[5], t);
+      if (!driver.writeJointCommand(target, comm::ControlMode::MODE_SERVOJ,
+                                    RobotReceiveTimeout::millisec(timeout_ms))) {
+        write_failures++;
+        dropped = true;
+        break;
+      }
+      cycles++;
     }
-    max_gap = std::max(max_gap, rd.timestamp - last_ts);
-    last_ts = rd.timestamp;
-    if (rd.runtime_state != kPlaying) {
-      not_playing++;
+    std::printf("servo (attempt %d): %ld cycles over %.3f s of controller time at %.0f Hz, %ld "
+                "write failures, %ld RTDE misses, largest package gap %.1f ms, program %s, max "
+                "|q5 - previous target| %.4f rad\n",
+                attempt, cycles, rd.timestamp - ts0, rate, write_failures, rd.missed,
+                1e3 * max_gap, dropped ? "stopped" : "played throughout", max_lag_err);
+    if (!dropped) {
+      break;
     }
-    // |actual − the target written one cycle ago|: bounded by the servo's lag, never a runaway
-    max_lag_err = std::max(max_lag_err, std::fabs(rd.q[5] - target[5]));
-    const double t = rd.timestamp - ts0;
-    ts_log.push_back(t);
-    q5_log.push_back(rd.q[5]);
-    target = q0;
-    target[5] = sine(q0[5], t);
-    if (!driver.writeJointCommand(target, comm::ControlMode::MODE_SERVOJ,
-                                  RobotReceiveTimeout::millisec(timeout_ms))) {
-      write_failures++;
+    // the gap this client saw is a lower bound of the gap between its writes' arrivals, which
+    // also wait for its processing and the socket (a tick or two): within 2 ticks of the
+    // timeout the controller's timeout is the client's doing
+    if (max_gap < 1e-3 * timeout_ms - 2.0 / rate - 1e-9) {
+      fail("servo phase: the program stopped although every package came well within the timeout");
     }
-    cycles++;
-  }
-  std::printf("servo: %ld cycles over %.3f s of controller time at %.0f Hz, %ld write failures, "
-              "%ld RTDE misses, largest package gap %.1f ms, %ld packages not PLAYING, program "
-              "drops %d, max |q5 - previous target| %.4f rad\n",
-              cycles, rd.timestamp - ts0, rate, write_failures, rd.missed, 1e3 * max_gap,
-              not_playing, g_program_drops.load(), max_lag_err);
-  if (write_failures != 0 || g_program_drops.load() != 0 || not_playing != 0) {
-    fail("servo phase: a write failed or the program stopped");
+    if (attempt == kAttempts) {
+      fail("servo phase: the client was held back past the receive timeout in every attempt");
+    }
+    std::printf("servo (attempt %d): this client went %.1f ms without a package, past the %u ms "
+                "receive timeout: the program ended as on a controller; resending it\n",
+                attempt, 1e3 * max_gap, timeout_ms);
+    if (!driver.sendRobotProgram()) {
+      fail("servo phase: the program could not be resent");
+    }
+    const auto t_resend = Clock::now();
+    while (!(rd.read() && rd.runtime_state == kPlaying && g_program_running.load() &&
+             driver.isReverseInterfaceConnected())) {
+      if (seconds_since(t_resend) > 15.0) {
+        fail("servo phase: the resent program did not connect within 15 s");
+      }
+    }
   }
   // Tracking (issue 9: asserted, not printed): the arm follows the commanded sine one lookahead
   // time late (servoj's lookahead 0.03 s, plus the tick that carries the command), and what is
@@ -255,9 +296,9 @@ int main(int argc, char *argv[]) {
     }
   }
   const double traj_took = rd.timestamp - ts_traj;
-  // let the arm settle on the last point, still in FORWARD with NOOPs
+  // let the arm settle on the last point (0.5 s), still in FORWARD with NOOPs
   const double ts_done = rd.timestamp;
-  while (rd.timestamp - ts_done < 0.2) {
+  while (rd.timestamp - ts_done < 0.5) {
     if (rd.read()) {
       driver.writeTrajectoryControlMessage(control::TrajectoryControlMessage::TRAJECTORY_NOOP, -1,
                                            RobotReceiveTimeout::millisec(timeout_ms));

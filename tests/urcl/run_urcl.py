@@ -106,7 +106,8 @@ OURS = [
     # the UR ROS 2 driver's calls (external_control.md §5.1): e-Series, 500 Hz; 30 s of servoj.
     # Its control loop runs at SCHED_FIFO 50 where permitted, as ros2_control's does on a real
     # robot: a 10 ms receive timeout ends the program if the client is descheduled that long
-    ("ros2_driver_pattern", ["resources/external_control.urscript", "30"], 120, ("e-series",)),
+    # (the program then starts the servo phase again, at most 4 times: hence the bound)
+    ("ros2_driver_pattern", ["resources/external_control.urscript", "30"], 200, ("e-series",)),
 ]
 
 PORTS = (30001, 30002, 30003, 30004, 29999)
@@ -252,6 +253,17 @@ def run_bounded(cmd, cwd, timeout, log_path, stdin=subprocess.DEVNULL):
             p.wait()
             rc = None
     return rc, time.monotonic() - t0
+
+
+def run_program(cmd, cwd, timeout, log_path):
+    """An example or one of our programs, bounded: its record (passed when it exits 0)."""
+    rc, secs = run_bounded(cmd, cwd, timeout, log_path)
+    status = "passed" if rc == 0 else "timeout" if rc is None else "failed"
+    rec = {"status": status, "seconds": round(secs, 2)}
+    if rc != 0:
+        rec["message"] = (f"killed after {timeout} s" if rc is None else f"exit {rc}") + \
+            "; " + last_lines(log_path)
+    return rec
 
 
 def list_tests(binary):
@@ -493,16 +505,10 @@ def run_version(args, name):
                 if reason:
                     results[test_id] = {"status": "excluded", "seconds": 0.0, "note": reason}
                     continue
-                lpath = os.path.join(logs, f"example_{example}.log")
-                rc, secs = run_bounded([os.path.join(exdir, example), ROBOT_IP, *extra], work,
-                                       timeout, lpath)
-                status = "passed" if rc == 0 else "timeout" if rc is None else "failed"
-                rec = {"status": status, "seconds": round(secs, 2)}
-                if rc != 0:
-                    rec["message"] = (f"killed after {timeout} s" if rc is None else
-                                      f"exit {rc}") + "; " + last_lines(lpath)
+                rec = run_program([os.path.join(exdir, example), ROBOT_IP, *extra], work,
+                                  timeout, os.path.join(logs, f"example_{example}.log"))
                 known = match(patterns, test_id, "known")
-                if known and status != "passed":
+                if known and rec["status"] != "passed":
                     rec["known"] = known
                 after(test_id, rec)
             ours = os.path.join(os.path.dirname(os.path.abspath(args.build)), "ours")
@@ -513,15 +519,9 @@ def run_version(args, name):
                     continue
                 if only is not None and test_id not in only:
                     continue
-                lpath = os.path.join(logs, f"urtwin_{prog}.log")
-                rc, secs = run_bounded([*rt, os.path.join(ours, prog), ROBOT_IP, *extra], work,
-                                       timeout, lpath)
-                status = "passed" if rc == 0 else "timeout" if rc is None else "failed"
-                rec = {"status": status, "seconds": round(secs, 2)}
-                if rc != 0:
-                    rec["message"] = (f"killed after {timeout} s" if rc is None else
-                                      f"exit {rc}") + "; " + last_lines(lpath)
-                after(test_id, rec)
+                after(test_id, run_program([*rt, os.path.join(ours, prog), ROBOT_IP, *extra],
+                                           work, timeout,
+                                           os.path.join(logs, f"urtwin_{prog}.log")))
     finally:
         robot.stop()
     return {"version": version, "series": series, "urtwin_restarts": robot.restarts,
