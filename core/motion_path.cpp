@@ -14,18 +14,19 @@
 //   blend radius"; the braking distance is added so that the next motion is known before the
 //   arm would have to brake for the via point.
 // - The next planned motion arriving while the move runs is queued behind it (c->pending, so
-//   that a HALT or any other command marks it done too). If both are in the same space (joint
-//   moves with joint moves, tool lines with tool lines) the path becomes: the move up to its
+//   that a HALT or any other command marks it done too). The path becomes: the move up to its
 //   blend zone, a blend, the next move from the blend's end. A tool blend is a circular arc
 //   tangent to both lines, entering and leaving at the same distance d from the via point; a
-//   joint blend is a cubic in joint space from the point where the TCP is d from the via point
-//   on the first move to the point where it is d from it on the next. d is r, shrunk to half
+//   joint blend (joint moves) is a cubic in joint space from the point where the TCP is d from
+//   the via point on the first move to the point where it is d from it on the next. d is r, shrunk to half
 //   of either move's length (UR's motion version 2: "dynamically reduce blend radii to prevent
 //   blend radius overlaps"; version 1 skips the move with an 'Overlapping Blends' warning) and
 //   to what is left of the move when the next one arrives late.
-// - Other pairs (a joint move and a tool move, movec before or after, a pure rotation, a line
-//   turning back on itself) are not blended: the move stops at its target and the next starts
-//   from rest there.
+// - Other pairs (a joint move and a tool move, movec before or after) blend on a joint-space
+//   cubic between the same two points (one IK at each end for a tool move), the time of each
+//   half its length at its end's speed. Not blended (the move stops at its target and the next
+//   starts from rest there): a pure rotation, a line turning back on itself, a move whose TCP
+//   does not move.
 // - With nothing queued the move stops at its target, as the last motion of a sequence does.
 // Context: RT.
 #include <Eigen/Geometry>
@@ -135,6 +136,61 @@ double joint_sigma_at(const urt_model_t* m, const urt_ctrl_t* c, const urt_path_
     }
   }
   return 0.5 * (near + far);
+}
+
+// σ on any piece where the TCP is d from P (P its end if from_end, else its start)
+double sigma_at(const urt_model_t* m, const urt_ctrl_t* c, const urt_path_seg_t& g,
+                const Vec3& P, double d, bool from_end) noexcept {
+  double x;
+  if (g.kind == URT_SEG_JOINT) {
+    return joint_sigma_at(m, c, g, P, d, from_end);
+  } else if (g.kind == URT_SEG_ARC) {  // a chord of length d
+    x = 2.0 * g.rho * std::asin(std::fmin(1.0, d / (2.0 * g.rho)));
+  } else {
+    x = d;
+  }
+  x = std::fmin(x, g.L);
+  return from_end ? g.L - x : x;
+}
+
+// the TCP position of any piece at σ
+Vec3 piece_position(const urt_model_t* m, const urt_ctrl_t* c, const urt_path_seg_t& g,
+                    double sigma) noexcept {
+  if (g.kind == URT_SEG_JOINT) {
+    double q[URT_NJ], dq[URT_NJ];
+    joint_eval(g, sigma, q, dq);
+    return tcp_position(m, c, q);
+  }
+  Vec3 p;
+  Mat3 R;
+  Vec6 dx;
+  tool_eval(g, sigma, p, R, dx);
+  return p;
+}
+
+// the joints of any piece at σ and their rate per unit path speed (tool pieces: IK near
+// q_near, one solve); false: no IK solution
+bool piece_joints(const urt_model_t* m, const urt_ctrl_t* c, const urt_path_seg_t& g,
+                  double sigma, const double* q_near, double* q, double* dq) noexcept {
+  if (g.kind == URT_SEG_JOINT) {
+    joint_eval(g, sigma, q, dq);
+    return true;
+  }
+  Vec3 p;
+  Mat3 R;
+  Vec6 dx;
+  tool_eval(g, sigma, p, R, dx);
+  const Vec3 r = rotvec_from_rotation(R);
+  const double pose[6] = {p[0], p[1], p[2], r[0], r[1], r[2]};
+  if (urt_ctrl_inverse_kinematics_tcp(m, c->tcp_offset, pose, q_near, q) != URT_OK) {
+    return false;
+  }
+  Mat3 Rq;
+  Vec3 pq;
+  Mat6 J;
+  tcp_kinematics(m->arm, c->tcp_offset, vec6(q), Rq, pq, &J);
+  put6(dls_solve(J, dx, 0.0), dq);
+  return true;
 }
 
 // ---- building a move's piece ----
@@ -285,13 +341,8 @@ void set_zone(const MotionEnv& e, urt_path_state_t& st, int k) noexcept {
   urt_path_move_t& mv = st.move[k];
   urt_path_seg_t& g = st.seg[st.nseg - 1];
   const double d = std::fmin(mv.r, 0.5 * mv.chord);
-  if (mv.r <= 0.0) {
-    mv.zone = 0.0;
-  } else if (mv.joint) {
-    mv.zone = g.s0 + g.len - joint_sigma_at(e.m, e.c, g, v3(mv.end_p), d, true);
-  } else {
-    mv.zone = d;
-  }
+  mv.zone = mv.r <= 0.0 ? 0.0
+                        : g.s0 + g.len - sigma_at(e.m, e.c, g, v3(mv.end_p), d, true);
 }
 
 // ---- optimovel: the tool speed and acceleration the joints allow at the set-point ----
@@ -370,22 +421,21 @@ bool blendable(const urt_path_state_t& st, const urt_path_move_t& mb,
                const urt_path_seg_t& b) noexcept {
   const urt_path_seg_t& a = st.seg[st.nseg - 1];
   const urt_path_move_t& ma = st.move[a.move];
-  if (st.nseg + 2 > URT_PATH_SEGS || ma.r <= 0.0) {
+  if (st.nseg + 2 > URT_PATH_SEGS || ma.r <= 0.0 || !(a.L > 0.0) || !(b.L > 0.0) ||
+      std::fmin(ma.r, std::fmin(0.5 * ma.chord, 0.5 * mb.chord)) < kMinBlend) {
     return false;
   }
-  if (ma.joint && mb.joint) {
-    return a.kind == URT_SEG_JOINT && b.kind == URT_SEG_JOINT && a.L > 0.0 && b.L > 0.0;
-  }
-  if (ma.joint || mb.joint || a.kind != URT_SEG_LINE || b.kind != URT_SEG_LINE) {
+  // a tool line that is a pure rotation has no TCP path to blend along
+  if ((a.kind == URT_SEG_LINE && v3(a.u).norm() < 0.5) ||
+      (b.kind == URT_SEG_LINE && v3(b.u).norm() < 0.5)) {
     return false;
   }
-  const Vec3 ua = v3(a.u), ub = v3(b.u);
-  // lines (not pure rotations), not turning back on themselves
-  return ua.norm() > 0.5 && ub.norm() > 0.5 && ua.dot(ub) > -1.0 + 1e-6;
+  // two lines: not turning back on themselves
+  return !(a.kind == URT_SEG_LINE && b.kind == URT_SEG_LINE) || v3(a.u).dot(v3(b.u)) > -1.0 + 1e-6;
 }
 
 // append the blend into B and B's rest behind the last piece (A's), shortening A
-void append_blend(const MotionEnv& e, urt_path_state_t& st, urt_path_seg_t b) noexcept {
+bool append_blend(const MotionEnv& e, urt_path_state_t& st, urt_path_seg_t b) noexcept {
   const urt_model_t* m = e.m;
   const urt_ctrl_t* c = e.c;
   urt_path_seg_t& a = st.seg[st.nseg - 1];
@@ -397,7 +447,46 @@ void append_blend(const MotionEnv& e, urt_path_state_t& st, urt_path_seg_t b) no
   urt_path_seg_t bl;
   std::memset(&bl, 0, sizeof bl);
   bl.move = b.move;
-  if (ma.joint) {
+  const bool lines = a.kind == URT_SEG_LINE && b.kind == URT_SEG_LINE;
+  const bool joints = a.kind == URT_SEG_JOINT && b.kind == URT_SEG_JOINT;
+  if (!lines && !joints) {
+    // a joint move and a tool move, or an arc: a joint-space cubic between the points where the
+    // TCP is d from the via point (one IK each end for a tool piece), timed from both speeds
+    const Vec3 via = v3(ma.end_p);
+    double sa = sigma_at(m, c, a, via, d, true);
+    sa = std::fmax(sa, a.s0 + (a.len - left));
+    const double dist_in = (piece_position(m, c, a, sa) - via).norm();
+    const double sb = sigma_at(m, c, b, via, std::fmin(dist_in, d), false);
+    double qa[URT_NJ], dqa[URT_NJ], qb[URT_NJ], dqb[URT_NJ];
+    if (!piece_joints(m, c, a, sa, c->q1, qa, dqa) || !piece_joints(m, c, b, sb, qa, qb, dqb)) {
+      return false;
+    }
+    a.len = sa - a.s0;
+    bl.kind = URT_SEG_HERMITE;
+    bl.orient = 1;           // mixed: A's units up to it, B's after it
+    bl.len = bl.L = a.L - sa;  // of A (the look-ahead stops here)
+    bl.rho = sb;               // of B
+    bl.v_max = ma.v;
+    for (int j = 0; j < URT_NJ; j++) {
+      bl.q0[j] = qa[j];
+      bl.dq[j] = qb[j] - qa[j];
+      bl.qd0[j] = dqa[j];
+      bl.qd1[j] = dqb[j];
+    }
+    if (mb.fv > 0.0) {  // optimovel after it: what the joints allow where it begins
+      double v = HUGE_VAL, acc = HUGE_VAL;
+      for (int j = 0; j < URT_NJ; j++) {
+        if (std::fabs(dqb[j]) > 1e-12) {
+          v = std::fmin(v, kSpeedMargin * m->joint[j].qd_max / std::fabs(dqb[j]));
+          acc = std::fmin(acc, kAccMargin * m->joint[j].qdd_max / std::fabs(dqb[j]));
+        }
+      }
+      bl.e1[0] = mb.fv * v;
+      bl.e1[1] = mb.fa * acc;
+    }
+    b.s0 = sb;
+    b.len = b.L - sb;
+  } else if (joints) {
     // the TCP d from the via point on both moves; not before where A is now
     const Vec3 via = v3(ma.end_p);
     double sa = joint_sigma_at(m, c, a, via, d, true);
@@ -452,6 +541,7 @@ void append_blend(const MotionEnv& e, urt_path_state_t& st, urt_path_seg_t b) no
   }
   st.seg[st.nseg++] = bl;
   st.seg[st.nseg++] = b;
+  return true;
 }
 
 // the head piece is done: the next one runs; entering B's pieces, B is the running move
@@ -473,7 +563,30 @@ void next_piece(const MotionEnv& e, urt_path_state_t& st) noexcept {
     c->active = c->pending;
     c->has_pending = 0;
   }
-  if (g.kind == URT_SEG_HERMITE) {
+  if (g.kind == URT_SEG_HERMITE && g.orient == 1) {
+    // mixed units: B starts at its own speed, as far as it can still stop; each half of the
+    // blend takes the time its length needs at its end's speed
+    const urt_path_seg_t& nb = st.seg[1];
+    const urt_path_move_t& mb = st.move[nb.move];
+    double rest = 0.0;
+    for (int k = 1; k < st.nseg; k++) {
+      rest += st.seg[k].len;
+    }
+    if (mb.fv > 0.0) {
+      st.opt_v = g.e1[0];
+      st.opt_a = g.e1[1];
+    }
+    const double a_b = mb.fa > 0.0 ? st.opt_a : mb.a;
+    const double v_b = mb.fv > 0.0 ? st.opt_v : nb.v_max;
+    const double vin = std::fmax(st.sd, 1e-3),
+                 vout = std::fmax(1e-3, std::fmin(v_b, std::sqrt(2.0 * a_b * rest)));
+    g.T = g.len / vin + g.rho / vout;
+    for (int j = 0; j < URT_NJ; j++) {
+      g.qd0[j] *= st.sd;
+      g.qd1[j] *= vout;
+    }
+    st.sd = vout;
+  } else if (g.kind == URT_SEG_HERMITE) {
     // from the speed the arm has now to the speed B starts with
     const double vin = st.sd, vout = std::fmin(g.v_max, std::fmax(st.sd, 0.0));
     g.T = vin + vout > 1e-9 ? 2.0 * g.len / (vin + vout) : 0.0;
@@ -508,6 +621,10 @@ double speed_limit(const urt_path_state_t& st, double a, double& to_end) noexcep
   double dist = st.seg[0].len - st.s;
   for (int k = 1; k < st.nseg; k++) {
     lim = std::fmin(lim, std::sqrt(piece_vmax(st, k) * piece_vmax(st, k) + 2.0 * a * dist));
+    if (st.seg[k].kind == URT_SEG_HERMITE && st.seg[k].orient == 1) {
+      to_end = HUGE_VAL;  // beyond it the path is in other units, and goes on
+      return lim;
+    }
     dist += st.seg[k].len;
   }
   to_end = std::fmax(dist, 0.0);
@@ -640,8 +757,10 @@ uint32_t tick(const MotionEnv& e) {
   urt_path_move_t& mv = st.move[0];
   if (!mv.done && mv.r > 0.0 && st.nmove == 1) {
     double left = 0.0;
-    for (int k = 0; k < st.nseg; k++) {
-      left += st.seg[k].len - (k == 0 ? st.s : 0.0);
+    for (int k = 0; k < st.nseg; k++) {  // (a blend's s is its time: not counted)
+      if (k > 0 || st.seg[k].kind != URT_SEG_HERMITE) {
+        left += st.seg[k].len - (k == 0 ? st.s : 0.0);
+      }
     }
     const double a = accel(st);
     const double brake = a > 0.0 ? st.sd * st.sd / (2.0 * a) : 0.0;
@@ -665,31 +784,36 @@ bool blend(const MotionEnv& e, const urt_ctrl_cmd_t& next) {
   new_move(mb, next);
   urt_path_seg_t b;
   const urt_path_seg_t& a = st.seg[st.nseg - 1];
-  bool ok;
+  bool ok = true;
   if (is_joint_kind(next.kind)) {
     double q_end[URT_NJ], dq[URT_NJ];
-    ok = a.kind == URT_SEG_JOINT;
-    if (ok) {
+    if (a.kind == URT_SEG_JOINT) {
       joint_eval(a, a.L, q_end, dq);
+    } else {
+      ok = piece_joints(e.m, c, a, a.L, c->q1, q_end, dq);
+    }
+    if (ok) {
       build_joint(e, next, q_end, mb, b);
     }
   } else {
-    ok = a.kind != URT_SEG_JOINT && a.kind != URT_SEG_HERMITE;
-    if (ok) {
-      Vec3 p;
-      Mat3 R;
+    Vec3 p;
+    Mat3 R;
+    if (a.kind == URT_SEG_JOINT) {
+      double q_end[URT_NJ], dq[URT_NJ];
+      joint_eval(a, a.L, q_end, dq);
+      tcp_kinematics(e.m->arm, c->tcp_offset, vec6(q_end), R, p, nullptr);
+    } else {
       Vec6 dx;
       tool_eval(a, a.L, p, R, dx);
-      ok = build_tool(e, next, p, R, mb, b);
     }
+    ok = build_tool(e, next, p, R, mb, b);
   }
   c->pending = next;
   c->has_pending = 1;
   b.move = 1;
   st.move[1] = mb;
   st.nmove = 2;
-  if (ok && blendable(st, mb, b)) {
-    append_blend(e, st, b);
+  if (ok && blendable(st, mb, b) && append_blend(e, st, b)) {
     st.queued_stop = 0;
     // B's own blend zone (its last piece is the last one now)
     set_zone(e, st, 1);

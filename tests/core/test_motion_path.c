@@ -228,6 +228,83 @@ static void test_blend__movej_passes_within_r_without_stopping(void **state) {
   rig_free(&r);
 }
 
+/* a joint move and a tool move, both ways, and a movec into a movel: a joint-space blend between
+ * the points where the TCP is d from the via point; the path passes inside r, the joints never
+ * rest near the via point, the last move ends on its target */
+static void mixed_case(int kind_a, int kind_b, double rad) {
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  go_work(&r);
+  static rec_t k;
+  k.n = 0;
+  double p0[6], via[6], to[6];
+  tcp_set(&r, p0);
+  memcpy(via, p0, sizeof via);
+  via[0] += 0.15;
+  memcpy(to, via, sizeof to);
+  to[1] += 0.15;
+  to[2] -= 0.05;
+  urt_ctrl_cmd_t a = cmd_of(&r, kind_a), b = cmd_of(&r, kind_b);
+  double qv[URT_NJ], qt[URT_NJ];
+  assert_int_equal(urt_ctrl_inverse_kinematics_tcp(r.m, r.c->tcp_offset, via, r.c->q1, qv), 0);
+  assert_int_equal(urt_ctrl_inverse_kinematics_tcp(r.m, r.c->tcp_offset, to, qv, qt), 0);
+  if (kind_a == URT_CTRL_MOVEJ) {
+    memcpy(a.q, qv, sizeof a.q);
+    a.a = 1.4;
+    a.v = 0.6;
+  } else {
+    memcpy(a.pose, via, sizeof a.pose);
+    a.a = 1.2;
+    a.v = 0.25;
+  }
+  if (kind_a == URT_CTRL_MOVEC) {  // an arc bulging along -y through the via point's x
+    a.q[0] = p0[0] + 0.075;
+    a.q[1] = p0[1] - 0.03;
+    a.q[2] = p0[2];
+  }
+  a.r = rad;
+  if (kind_b == URT_CTRL_MOVEJ) {
+    memcpy(b.q, qt, sizeof b.q);
+    b.a = 1.4;
+    b.v = 0.6;
+  } else {
+    memcpy(b.pose, to, sizeof b.pose);
+    b.a = 1.2;
+    b.v = 0.25;
+  }
+  run_cmd(&r, &a, &k, 0);
+  run_cmd(&r, &b, &k, 1);
+  double dmin = 1e9, qd_min = 1e9, end[6];
+  for (int i = 0; i < k.n; i++) {
+    const double dv = dist3(k.p[i], via);
+    dmin = fmin(dmin, dv);
+    if (dv < rad) qd_min = fmin(qd_min, k.qd[i]);
+  }
+  tcp_set(&r, end);
+  print_message("blend kind %d -> %d, r %.3f: %d periods, closest to the via point %.5f m, "
+                "min |qd| within r %.4f rad/s, end off %.2e m\n",
+                kind_a, kind_b, rad, k.n, dmin, qd_min, dist3(end, to));
+  assert_true(dmin < rad && dmin > 0.05 * rad);
+  assert_true(qd_min > 0.05);
+  assert_true(dist3(end, to) < 1e-8);
+  assert_int_equal(r.c->motion, URT_MOTION_IDLE);
+  rig_free(&r);
+}
+
+static void test_blend__movej_into_movel(void **state) {
+  (void)state;
+  mixed_case(URT_CTRL_MOVEJ, URT_CTRL_MOVEL, 0.04);
+}
+
+static void test_blend__movel_into_movej(void **state) {
+  (void)state;
+  mixed_case(URT_CTRL_MOVEL, URT_CTRL_MOVEJ, 0.04);
+}
+
+static void test_blend__movec_into_movel(void **state) {
+  (void)state;
+  mixed_case(URT_CTRL_MOVEC, URT_CTRL_MOVEL, 0.03);
+}
+
 static void test_blend__the_last_move_stops_at_its_target(void **state) {
   (void)state;
   rig_t r = rig_new(urt_test_quiet, 0.002, 1);
@@ -377,6 +454,9 @@ int main(void) {
       cmocka_unit_test(test_blend__radius_over_half_the_segment_shrinks_to_half),
       cmocka_unit_test(test_movep__constant_tool_speed_through_a_circular_blend),
       cmocka_unit_test(test_blend__movej_passes_within_r_without_stopping),
+      cmocka_unit_test(test_blend__movej_into_movel),
+      cmocka_unit_test(test_blend__movel_into_movej),
+      cmocka_unit_test(test_blend__movec_into_movel),
       cmocka_unit_test(test_blend__the_last_move_stops_at_its_target),
       cmocka_unit_test(test_movec__every_point_on_the_circle_mode_1_fixed_to_the_tangent),
       cmocka_unit_test(test_movec__mode_0_interpolates_to_pose_to),
