@@ -120,14 +120,14 @@ double joint_dist(const urt_model_t* m, const urt_ctrl_t* c, const urt_path_seg_
 }
 
 // σ on a joint piece where the TCP is d from P: from_end searches down from σ = L (P its end),
-// else up from σ = 0 (P its start); bisection, 40 forward kinematics at most
+// else up from σ = 0 (P its start); bisection, 33 forward kinematics at most
 double joint_sigma_at(const urt_model_t* m, const urt_ctrl_t* c, const urt_path_seg_t& g,
                       const Vec3& P, double d, bool from_end) noexcept {
   double near = from_end ? g.L : 0.0, far = from_end ? 0.0 : g.L;
   if (joint_dist(m, c, g, far, P) <= d) {
     return far;
   }
-  for (int k = 0; k < 40; k++) {
+  for (int k = 0; k < 32; k++) {
     const double mid = 0.5 * (near + far);
     if (joint_dist(m, c, g, mid, P) < d) {
       near = mid;

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "controller_harness.h"
 #include "test_model.h"
@@ -93,9 +94,20 @@ static void record(rec_t *k, const rig_t *r) {
   k->n++;
 }
 
-/* send cmd, record until its id is done (and, if wait_idle, until the motion is over) */
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* send cmd, record until its id is done (and, if wait_idle, until the motion is over); the
+ * wall time of the period that took the command (planning, and queueing a blend) is printed,
+ * not asserted */
 static void run_cmd(rig_t *r, const urt_ctrl_cmd_t *cmd, rec_t *k, int wait_idle) {
+  const double t0 = now_s();
   rig_period(r, cmd);
+  print_message("  the period taking command kind %d (r %.3f): %.1f us, physics included\n",
+                cmd->kind, cmd->r, 1e6 * (now_s() - t0));
   record(k, r);
   for (int i = 0; i < 10000 && (r->c->motion_done_id < cmd->id ||
                                 (wait_idle && r->c->motion != URT_MOTION_IDLE));
