@@ -9,10 +9,10 @@
 // Blends (UR's script manual, movej/movel/movep: "the robot arm trajectory will be modified to
 // avoid the robot stopping at the point"):
 // - A move with r > 0 marks its id done early, so that the program goes on to its next motion
-//   while the arm still moves: when the rest of the move is within max(r, its braking distance)
-//   plus four periods at the current speed. UR evaluates the next motion "when entering the
-//   blend radius"; the braking distance is added so that the next motion is known before the
-//   arm would have to brake for the via point.
+//   while the arm still moves: when the rest of the move is within r (its blend zone) plus its
+//   braking distance plus four periods at the current speed. UR evaluates the next motion "when
+//   entering the blend radius"; the braking distance is added so that the next motion is known
+//   before the arm would have to brake, for the via point or for a slower next motion.
 // - The next planned motion arriving while the move runs is queued behind it (c->pending, so
 //   that a HALT or any other command marks it done too). The path becomes: the move up to its
 //   blend zone, a blend, the next move from the blend's end. A tool blend is a circular arc
@@ -318,7 +318,7 @@ bool build_tool(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const Vec3& p_s, 
   if (cmd.kind == URT_CTRL_OPTIMOVEL) {
     mv.fa = cmd.a;
     mv.fv = cmd.v;
-    v = a = HUGE_VAL;  // the joints' limits at the set-point (opt_v, opt_a)
+    v = a = HUGE_VAL;  // the joints' limits where it runs (opt_v, opt_a)
   }
   g.v_max = v;
   mv.a = a;
@@ -347,21 +347,26 @@ void set_zone(const MotionEnv& e, urt_path_state_t& st, int k) noexcept {
 
 // ---- optimovel: the tool speed and acceleration the joints allow at the set-point ----
 
-void opti_limits(const MotionEnv& e, urt_path_state_t& st, const Mat6& J, const Vec6& dx) {
-  const urt_path_move_t& mv = st.move[st.seg[0].move];
+// from the joint rates per unit path speed w: the fractions of the tool speed and acceleration
+// at which the fastest joint reaches its planned limit
+void opti_from_rates(const urt_model_t* m, urt_path_move_t& mv, const double* w) noexcept {
+  double v = HUGE_VAL, a = HUGE_VAL;
+  for (int j = 0; j < URT_NJ; j++) {
+    if (std::fabs(w[j]) > 1e-12) {
+      v = std::fmin(v, kSpeedMargin * m->joint[j].qd_max / std::fabs(w[j]));
+      a = std::fmin(a, kAccMargin * m->joint[j].qdd_max / std::fabs(w[j]));
+    }
+  }
+  mv.opt_v = mv.fv * v;
+  mv.opt_a = mv.fa * a;
+}
+
+void opti_limits(const MotionEnv& e, urt_path_move_t& mv, const Mat6& J, const Vec6& dx) {
   if (mv.fv <= 0.0) {
     return;
   }
   const Vec6 w = dls_solve(J, dx, dls_lambda(J));  // joint speed per unit path speed
-  double v = HUGE_VAL, a = HUGE_VAL;
-  for (int j = 0; j < URT_NJ; j++) {
-    if (std::fabs(w[j]) > 1e-12) {
-      v = std::fmin(v, kSpeedMargin * e.m->joint[j].qd_max / std::fabs(w[j]));
-      a = std::fmin(a, kAccMargin * e.m->joint[j].qdd_max / std::fabs(w[j]));
-    }
-  }
-  st.opt_v = mv.fv * v;
-  st.opt_a = mv.fa * a;
+  opti_from_rates(e.m, mv, w.data());
 }
 
 // ---- the set-point at the path position ----
@@ -410,7 +415,7 @@ bool place(const MotionEnv& e, urt_path_state_t& st) noexcept {
     c->q1[j] = q[j];
     c->qd1[j] = w[j] * rate;
   }
-  opti_limits(e, st, J, dx);
+  opti_limits(e, st.move[g.move], J, dx);
   return true;
 }
 
@@ -474,15 +479,7 @@ bool append_blend(const MotionEnv& e, urt_path_state_t& st, urt_path_seg_t b) no
       bl.qd1[j] = dqb[j];
     }
     if (mb.fv > 0.0) {  // optimovel after it: what the joints allow where it begins
-      double v = HUGE_VAL, acc = HUGE_VAL;
-      for (int j = 0; j < URT_NJ; j++) {
-        if (std::fabs(dqb[j]) > 1e-12) {
-          v = std::fmin(v, kSpeedMargin * m->joint[j].qd_max / std::fabs(dqb[j]));
-          acc = std::fmin(acc, kAccMargin * m->joint[j].qdd_max / std::fabs(dqb[j]));
-        }
-      }
-      bl.e1[0] = mb.fv * v;
-      bl.e1[1] = mb.fa * acc;
+      opti_from_rates(m, st.move[b.move], dqb);
     }
     b.s0 = sb;
     b.len = b.L - sb;
@@ -572,12 +569,8 @@ void next_piece(const MotionEnv& e, urt_path_state_t& st) noexcept {
     for (int k = 1; k < st.nseg; k++) {
       rest += st.seg[k].len;
     }
-    if (mb.fv > 0.0) {
-      st.opt_v = g.e1[0];
-      st.opt_a = g.e1[1];
-    }
-    const double a_b = mb.fa > 0.0 ? st.opt_a : mb.a;
-    const double v_b = mb.fv > 0.0 ? st.opt_v : nb.v_max;
+    const double a_b = mb.fa > 0.0 ? mb.opt_a : mb.a;
+    const double v_b = mb.fv > 0.0 ? mb.opt_v : nb.v_max;
     const double vin = std::fmax(st.sd, 1e-3),
                  vout = std::fmax(1e-3, std::fmin(v_b, std::sqrt(2.0 * a_b * rest)));
     g.T = g.len / vin + g.rho / vout;
@@ -602,14 +595,14 @@ void next_piece(const MotionEnv& e, urt_path_state_t& st) noexcept {
 
 double accel(const urt_path_state_t& st) noexcept {
   const urt_path_move_t& mv = st.move[st.seg[0].move];
-  return mv.fa > 0.0 ? st.opt_a : mv.a;
+  return mv.fa > 0.0 ? mv.opt_a : mv.a;
 }
 
 double piece_vmax(const urt_path_state_t& st, int k) noexcept {
   const urt_path_move_t& mv = st.move[st.seg[k].move];
   double v = st.seg[k].v_max;
   if (mv.fv > 0.0) {
-    v = std::fmin(v, st.opt_v);
+    v = std::fmin(v, mv.opt_v);
   }
   return v;
 }
@@ -658,7 +651,7 @@ void begin(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
     Mat3 Re;
     Vec6 dx;
     tool_eval(st.seg[0], 0.0, pe, Re, dx);
-    opti_limits(e, st, J, dx);
+    opti_limits(e, st.move[0], J, dx);
   }
   set_zone(e, st, 0);
   c->motion = URT_MOTION_PATH;
@@ -764,7 +757,7 @@ uint32_t tick(const MotionEnv& e) {
     }
     const double a = accel(st);
     const double brake = a > 0.0 ? st.sd * st.sd / (2.0 * a) : 0.0;
-    if (left <= std::fmax(mv.zone, brake) + kLookTicks * st.sd * dt) {
+    if (left <= mv.zone + brake + kLookTicks * st.sd * dt) {
       mv.done = 1;
       mark_done(c, mv.id);
     }
@@ -807,6 +800,23 @@ bool blend(const MotionEnv& e, const urt_ctrl_cmd_t& next) {
       tool_eval(a, a.L, p, R, dx);
     }
     ok = build_tool(e, next, p, R, mb, b);
+  }
+  if (ok && mb.fv > 0.0) {
+    // optimovel queued: what the joints allow where it begins (A's target), one IK for a tool A
+    double q_end[URT_NJ], dq[URT_NJ];
+    if (piece_joints(e.m, c, a, a.L, c->q1, q_end, dq)) {
+      Mat3 R;
+      Vec3 p;
+      Mat6 J;
+      tcp_kinematics(e.m->arm, c->tcp_offset, vec6(q_end), R, p, &J);
+      Vec3 pb;
+      Mat3 Rb;
+      Vec6 dx;
+      tool_eval(b, 0.0, pb, Rb, dx);
+      opti_limits(e, mb, J, dx);
+    } else {
+      ok = false;
+    }
   }
   c->pending = next;
   c->has_pending = 1;

@@ -102,6 +102,8 @@ typedef struct urt_path_move {
   double chord;                  /* TCP distance from its start to its target [m]             */
   double zone;                   /* path length from its end at which the blend zone begins  */
   double end_p[3];               /* TCP position of its target                                */
+  double opt_v, opt_a;           /* optimovel: the tool speed and acceleration the joints allow
+                                    where it runs now (where it will begin, while queued)     */
 } urt_path_move_t;
 
 typedef struct urt_path_state {
@@ -111,7 +113,6 @@ typedef struct urt_path_state {
   int32_t queued_stop;           /* 1: the queued move starts from rest at this one's target  */
   int32_t pad_;
   double s, sd;                  /* along the head piece, path speed                          */
-  double opt_v, opt_a;           /* optimovel: the tool speed and acceleration the joints allow here */
 } urt_path_state_t;
 
 typedef union urt_ctrl_motion_state {
