@@ -336,6 +336,72 @@ static void test_blend__movel_into_optimovel(void **state) {
   mixed_case(URT_CTRL_MOVEL, URT_CTRL_OPTIMOVEL, 0.04);
 }
 
+/* a pair that is not blended (a pure rotation first): the move stops at its target, at rest,
+ * and the next one starts from there */
+static void test_blend__a_pure_rotation_stops_at_its_target_then_the_next_starts(void **state) {
+  (void)state;
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  go_work(&r);
+  double p[6], rot[6], to[6];
+  tcp_set(&r, p);
+  memcpy(rot, p, sizeof rot);
+  rot[5] += 0.3;  // about the base z: the TCP does not move
+  urt_ctrl_cmd_t a = tool_move(&r, URT_CTRL_MOVEL, rot, 1.0, 0.5, 0.05);
+  rig_period(&r, &a);
+  for (int i = 0; i < 5000 && r.c->motion_done_id < a.id; i++) rig_period(&r, NULL);
+  tcp_set(&r, to);
+  memcpy(to, rot, 3 * sizeof(double));
+  to[0] += 0.1;
+  urt_ctrl_cmd_t b = tool_move(&r, URT_CTRL_MOVEL, to, 1.2, 0.25, 0.0);
+  rig_period(&r, &b);
+  // until the arm rests at a's target; b is queued meanwhile
+  int rested = 0;
+  double at_rest[6];
+  for (int i = 0; i < 5000 && r.c->motion_done_id < b.id; i++) {
+    rig_period(&r, NULL);
+    if (!rested && max_abs_qd(&r) == 0.0) {
+      rested = 1;
+      tcp_set(&r, at_rest);
+    }
+  }
+  double end[6];
+  tcp_set(&r, end);
+  print_message("pure rotation r 0.05 then movel: rested %.2e m from the rotation's target, end "
+                "off %.2e m\n",
+                rested ? dist3(at_rest, rot) : -1.0, dist3(end, to));
+  assert_true(rested);
+  assert_true(dist3(at_rest, rot) < 1e-8);
+  assert_true(dist3(end, to) < 1e-8);
+  rig_free(&r);
+}
+
+/* HALT while a move runs with the next one queued behind it: both ids are done, the arm stops */
+static void test_blend__halt_ends_the_move_and_the_queued_one(void **state) {
+  (void)state;
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  go_work(&r);
+  double p[6], via[6], to[6];
+  tcp_set(&r, p);
+  memcpy(via, p, sizeof via);
+  via[0] += 0.2;
+  memcpy(to, via, sizeof to);
+  to[1] += 0.2;
+  urt_ctrl_cmd_t a = tool_move(&r, URT_CTRL_MOVEL, via, 1.2, 0.25, 0.05);
+  urt_ctrl_cmd_t b = tool_move(&r, URT_CTRL_MOVEL, to, 1.2, 0.25, 0.0);
+  rig_period(&r, &a);
+  run_for(&r, 0.1);
+  rig_period(&r, &b);  // early: queued behind a
+  assert_true(r.c->motion_done_id < b.id);
+  assert_int_equal(r.c->has_pending, 1);
+  urt_ctrl_cmd_t h = cmd_of(&r, URT_CTRL_HALT);
+  rig_period(&r, &h);
+  assert_true(r.c->motion_done_id >= b.id);
+  run_for(&r, 0.5);
+  assert_true(max_abs_qd(&r) == 0.0);
+  assert_int_equal(r.c->motion, URT_MOTION_IDLE);
+  rig_free(&r);
+}
+
 static void test_blend__the_last_move_stops_at_its_target(void **state) {
   (void)state;
   rig_t r = rig_new(urt_test_quiet, 0.002, 1);
@@ -491,6 +557,8 @@ int main(void) {
       cmocka_unit_test(test_blend__movel_into_movej),
       cmocka_unit_test(test_blend__movec_into_movel),
       cmocka_unit_test(test_blend__movel_into_optimovel),
+      cmocka_unit_test(test_blend__a_pure_rotation_stops_at_its_target_then_the_next_starts),
+      cmocka_unit_test(test_blend__halt_ends_the_move_and_the_queued_one),
       cmocka_unit_test(test_blend__the_last_move_stops_at_its_target),
       cmocka_unit_test(test_movec__every_point_on_the_circle_mode_1_fixed_to_the_tangent),
       cmocka_unit_test(test_movec__mode_0_interpolates_to_pose_to),
