@@ -11,7 +11,9 @@
 // exceptions. Context: RT unless stated.
 //
 // Choices (the contract leaves them to the controller):
-// - Blending (r > 0) is not implemented: movej/movel stop at every target, as with r = 0.
+// - Blending (r > 0): movej/optimovej/movel with r > 0, movep, movec and optimovel run as a
+//   planned path (motion_path.cpp); a planned motion arriving while one with r > 0 runs is
+//   queued behind it through the running motion's blend hook (below, in apply_motion).
 // - A movej/movel arriving while the set-point moves first brings the arm to rest at the new
 //   command's deceleration, then starts (c->pending); the previous motion's id is marked done.
 // - When not RUNNING, or in a protective stop, the set-point holds where the arm is (the brakes

@@ -88,6 +88,9 @@ extern const Motion kServocMotion;     // motion_servoc.cpp
 extern const Motion kTorqueMotion;     // motion_torque.cpp
 extern const Motion kFreedriveMotion;  // motion_freedrive.cpp
 extern const Motion kForceMotion;      // motion_force.cpp
+extern const Motion kPathJointMotion;  // motion_path.cpp: movej/optimovej with r > 0
+extern const Motion kPathToolMotion;   // motion_path.cpp: movel with r > 0, movep, optimovel
+extern const Motion kPathArcMotion;    // motion_path.cpp: movec
 
 // ---- shared by the types ----
 

@@ -6,12 +6,19 @@ namespace urt::core {
 
 const Motion* motion_for_command(const urt_ctrl_cmd_t& cmd) noexcept {
   switch (cmd.kind) {
+    // with a blend radius a planned motion runs as a path (motion_path.cpp); without one as
+    // before
     case URT_CTRL_MOVEJ:
-      return &kMovejMotion;
+      return cmd.r > 0.0 ? &kPathJointMotion : &kMovejMotion;
     case URT_CTRL_OPTIMOVEJ:
-      return &kOptimovejMotion;
+      return cmd.r > 0.0 ? &kPathJointMotion : &kOptimovejMotion;
     case URT_CTRL_MOVEL:
-      return &kMovelMotion;
+      return cmd.r > 0.0 ? &kPathToolMotion : &kMovelMotion;
+    case URT_CTRL_MOVEP:
+    case URT_CTRL_OPTIMOVEL:
+      return &kPathToolMotion;
+    case URT_CTRL_MOVEC:
+      return &kPathArcMotion;
     case URT_CTRL_SERVOJ:
       return &kServojMotion;
     case URT_CTRL_SPEEDJ:
@@ -63,6 +70,8 @@ const Motion& motion_of(urt_ctrl_motion_t id) noexcept {
       return kFreedriveMotion;
     case URT_MOTION_FORCE:
       return kForceMotion;
+    case URT_MOTION_PATH:
+      return kPathToolMotion;  // the hooks of a path are the same for every kind
     case URT_MOTION_IDLE:
     default:
       return kIdleMotion;

@@ -145,6 +145,22 @@ static int poll_main(void *ctx) {
   }
 }
 
+/* a program that ended normally with a move whose blend radius let it go on (its id done, the
+ * arm still on the way, core/motion_path.cpp) ends when that move has stopped at its target, as
+ * the last motion of a sequence does on a controller; a stop request or a controller that no
+ * longer ticks ends the wait */
+static void finish_path(urt_runner_t *r) {
+  urt_snapshot_t s;
+  r->host.snapshot(r->host.ctx, &s);
+  while (s.motion == URT_MOTION_PATH && !poll_main(r)) {
+    uint64_t tick = s.tick;
+    if (r->host.wait_tick(r->host.ctx, tick, r->cfg.wait_timeout_ms) == tick) {
+      break;
+    }
+    r->host.snapshot(r->host.ctx, &s);
+  }
+}
+
 static void run_main(urt_runner_t *r, const unit *u) {
   us_prog *p = NULL;
   us_err e;
@@ -163,6 +179,8 @@ static void run_main(urt_runner_t *r, const unit *u) {
   p->secondary = false;
   if (urt__us_run(p, &h, &e) != 0) {
     report(r, &e, false);
+  } else {
+    finish_path(r);
   }
   // the end of a program stops the arm (speedj without t, blends, a stop from outside), at
   // once: not after the wait for the peers below

@@ -83,12 +83,8 @@ int urt__us_arg_bool(vm *V, const us_node *n, const sv *a, int k, bool *out) {
  * PENDING when a client script calls it. */
 #define P(...) {__VA_ARGS__}
 static const us_builtin kUnsupported[] = {
-    {"movep", NULL, 0, P(NULL)},
-    {"movec", NULL, 0, P(NULL)},
     {"servol", NULL, 0, P(NULL)},
     {"rpc_factory", NULL, 0, P(NULL)},
-    // the controller's motions and modes that urtwin does not have yet
-    {"optimovel", NULL, 0, P(NULL)},
     // no external force/torque sensor input in urtwin
     {"ft_rtde_input_enable", NULL, 0, P(NULL)},
     {"enable_external_ft_sensor", NULL, 0, P(NULL)},

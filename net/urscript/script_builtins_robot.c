@@ -78,6 +78,60 @@ static int b_movel(vm *V, const us_node *n, sv *a, sv *out) {
   return b_move(V, n, a, out, URT_CTRL_MOVEL, 1.2, 0.25);
 }
 
+/* movep(pose, a=1.2, v=0.25, r=0): the tool at constant speed v, circular blends of radius r
+ * (core/motion_path.cpp); a joint list is a pose through forward kinematics */
+static int b_movep(vm *V, const us_node *n, sv *a, sv *out) {
+  urt_ctrl_cmd_t c = {.kind = URT_CTRL_MOVEP};
+  double x[6];
+  bool is_pose;
+  if (urt__us_arg_vec6(V, n, a, 0, x, &is_pose) != X_OK ||
+      urt__us_arg_num(V, n, a, 1, 1.2, &c.a) != X_OK ||
+      urt__us_arg_num(V, n, a, 2, 0.25, &c.v) != X_OK ||
+      urt__us_arg_num(V, n, a, 3, 0, &c.r) != X_OK || to_pose(V, n, x, is_pose, c.pose) != X_OK) {
+    return X_ERR;
+  }
+  return urt__us_motion(V, n, "movep", &c, true);
+}
+
+/* movec(pose_via, pose_to, a=1.2, v=0.25, r=0, mode=0): the arc from the current pose through
+ * pose_via's position to pose_to; mode 0 interpolates the orientation to pose_to's, mode 1
+ * keeps it fixed relative to the arc's tangent. The controller takes pose_via in q[0..2] */
+static int b_movec(vm *V, const us_node *n, sv *a, sv *out) {
+  urt_ctrl_cmd_t c = {.kind = URT_CTRL_MOVEC};
+  double xv[6], xt[6], via[6], mode;
+  bool via_pose, to_pose_;
+  if (urt__us_arg_vec6(V, n, a, 0, xv, &via_pose) != X_OK ||
+      urt__us_arg_vec6(V, n, a, 1, xt, &to_pose_) != X_OK ||
+      urt__us_arg_num(V, n, a, 2, 1.2, &c.a) != X_OK ||
+      urt__us_arg_num(V, n, a, 3, 0.25, &c.v) != X_OK ||
+      urt__us_arg_num(V, n, a, 4, 0, &c.r) != X_OK ||
+      urt__us_arg_num(V, n, a, 5, 0, &mode) != X_OK || to_pose(V, n, xv, via_pose, via) != X_OK ||
+      to_pose(V, n, xt, to_pose_, c.pose) != X_OK) {
+    return X_ERR;
+  }
+  if (mode != 0 && mode != 1) {
+    return urt__us_fail(V, n, "movec: mode must be 0 (unconstrained) or 1 (fixed), not %g", mode);
+  }
+  c.index = (int32_t)mode;
+  memcpy(c.q, via, 3 * sizeof *c.q);
+  return urt__us_motion(V, n, "movec", &c, true);
+}
+
+/* optimovel(goal, a=0.3, v=0.3, r=0): a and v are fractions in (0, 1] of the tool acceleration
+ * and speed the joints allow along the line; the controller refuses fractions outside it */
+static int b_optimovel(vm *V, const us_node *n, sv *a, sv *out) {
+  urt_ctrl_cmd_t c = {.kind = URT_CTRL_OPTIMOVEL};
+  double x[6];
+  bool is_pose;
+  if (urt__us_arg_vec6(V, n, a, 0, x, &is_pose) != X_OK ||
+      urt__us_arg_num(V, n, a, 1, 0.3, &c.a) != X_OK ||
+      urt__us_arg_num(V, n, a, 2, 0.3, &c.v) != X_OK ||
+      urt__us_arg_num(V, n, a, 3, 0, &c.r) != X_OK || to_pose(V, n, x, is_pose, c.pose) != X_OK) {
+    return X_ERR;
+  }
+  return urt__us_motion(V, n, "optimovel", &c, true);
+}
+
 static int b_servoj(vm *V, const us_node *n, sv *a, sv *out) {
   urt_ctrl_cmd_t c = {.kind = URT_CTRL_SERVOJ};
   double x[6], ignored;
@@ -271,6 +325,9 @@ const us_builtin urt__us_builtins_robot[] = {
     {"movej", b_movej, 1, P("q", "a", "v", "t", "r")},
     {"optimovej", b_optimovej, 1, P("q", "a", "v", "r")},
     {"movel", b_movel, 1, P("pose", "a", "v", "t", "r")},
+    {"movep", b_movep, 1, P("pose", "a", "v", "r")},
+    {"movec", b_movec, 2, P("pose_via", "pose_to", "a", "v", "r", "mode")},
+    {"optimovel", b_optimovel, 1, P("goal", "a", "v", "r")},
     {"servoj", b_servoj, 1, P("q", "a", "v", "t", "lookahead_time", "gain")},
     {"speedj", b_speedj, 2, P("qd", "a", "t", "t_min")},
     {"speedl", b_speedl, 2, P("xd", "a", "t", "aRot", "t_min")},

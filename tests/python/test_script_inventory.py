@@ -29,10 +29,7 @@ URCL_SCRIPT = URCL_SRC / "resources" / "external_control.urscript"
 RTDE_VERSIONS = [(3, 15), (5, 19), (5, 23), (10, 11)]
 
 # called by a client script and not run by urtwin yet: name → why, and who brings it
-MOTIONS = "issue 9 item 1 (motions and modes) brings it"
 PENDING = {
-    # motions the controller does not have yet (item 1 of issue 9): the builtins come with them
-    "movep": MOTIONS, "movec": MOTIONS, "optimovel": MOTIONS,
     # no state behind them in the controller yet
     "get_target_waypoint": "needs the active motion's target (motions)",
     # urtwin has no external force/torque sensor input

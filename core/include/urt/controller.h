@@ -79,14 +79,17 @@ typedef enum urt_ctrl_motion {
   URT_MOTION_SERVOC,     /* circular-blend servo toward a TCP pose at tool speed v */
   URT_MOTION_TORQUE,     /* direct joint-torque control of the drives             */
   URT_MOTION_FREEDRIVE,  /* teach mode: gravity-compensated, back-drivable arm    */
-  URT_MOTION_FORCE       /* force mode: compliant along selected task-frame axes  */
+  URT_MOTION_FORCE,      /* force mode: compliant along selected task-frame axes  */
+  URT_MOTION_PATH        /* a planned path of segments: blended movej/movel (r > 0), movep,
+                            movec, optimovel (core/motion_path.cpp)                     */
 } urt_ctrl_motion_t;
 
 /* One command into the controller: a value, never a pointer. */
 typedef enum urt_ctrl_cmd_kind {
   URT_CTRL_NONE = 0,
   /* motion (each carries id: the program waits until snapshot.motion_done_id >= id) */
-  URT_CTRL_MOVEJ,        /* q[6], a, v, t (t > 0 overrides a and v), r (0: stop at target) */
+  URT_CTRL_MOVEJ,        /* q[6], a, v, t (t > 0 overrides a and v), r (0: stop at target;
+                            > 0: blend into the next planned motion, core/motion_path.cpp) */
   URT_CTRL_MOVEL,        /* pose[6], a, v, t, r                                  */
   URT_CTRL_SERVOJ,       /* q[6], t, lookahead_time, gain                          */
   URT_CTRL_SPEEDJ,       /* qd[6], a, t (t <= 0: until replaced)                   */
@@ -146,8 +149,17 @@ typedef enum urt_ctrl_cmd_kind {
                                  levels (the same bits, an integer); a = mask of the analog
                                  inputs to change (bit 0–1 standard 0–1, bit 2–3 tool 0–1),
                                  q[0..3] = their values [V], in [0, 10]                     */
-  URT_CTRL_ZERO_FTSENSOR      /* pose[6] = the raw TCP wrench (snapshot tcp_force_raw) that
+  URT_CTRL_ZERO_FTSENSOR,     /* pose[6] = the raw TCP wrench (snapshot tcp_force_raw) that
                                  reads zero from now on: zero_ftsensor()                     */
+  /* added by the blends and process moves (core/motion_path.cpp) */
+  URT_CTRL_MOVEP,             /* pose[6], a, v, r: the tool at constant speed v on lines,
+                                 circular blends of radius r between them                   */
+  URT_CTRL_MOVEC,             /* pose[6] = pose_to, q[6] = pose_via (position used), a, v, r,
+                                 index = mode (0: orientation interpolated to pose_to, 1: fixed
+                                 relative to the arc's tangent)                             */
+  URT_CTRL_OPTIMOVEL          /* pose[6], a, v: fractions in (0, 1] of the tool acceleration and
+                                 speed the joints allow along the line (qdd_max, qd_max with the
+                                 planner's margins 0.9, 0.98), r as movel                    */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {

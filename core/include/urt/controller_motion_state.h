@@ -68,6 +68,53 @@ typedef struct urt_force_state {
   double xd_goal[6];             /* twist of the speedl running inside force mode, base frame */
 } urt_force_state_t;
 
+/* A planned path (core/motion_path.cpp): up to URT_PATH_SEGS pieces, the head one running.
+ * A piece's geometry is evaluated at σ = s0 + s for s in [0, len]: LINE p = p0 + u σ; ARC
+ * p = p0 + ρ (cos(σ/ρ) e1 + sin(σ/ρ) e2); JOINT q = q0 + dq σ/L; HERMITE a joint-space cubic
+ * from (q0, qd0) to (q0 + dq, qd1) over its duration T. Orientation (LINE, ARC): orient 0
+ * R = Rot(r0) · Rot(axis, θ σ/L) (axis in the start frame), orient 1 R = Rot(n, σ/ρ) · Rot(r0)
+ * (n = e1 × e2: fixed relative to the arc's tangent). */
+enum { URT_SEG_JOINT = 1, URT_SEG_LINE = 2, URT_SEG_ARC = 3, URT_SEG_HERMITE = 4 };
+#define URT_PATH_SEGS 4
+
+typedef struct urt_path_seg {
+  int32_t kind;                  /* URT_SEG_*                                                */
+  int32_t move;                  /* the move it belongs to (index into urt_path_state_t.move) */
+  int32_t orient;                /* 0 interpolated, 1 fixed relative to the arc's tangent     */
+  int32_t pad_;
+  double s0, len, L;             /* offset into the geometry, length run, geometry's length  */
+  double v_max;                  /* path speed limit on it [m/s or rad/s]                     */
+  double T;                      /* HERMITE: duration [s] (set when it starts)               */
+  double p0[3], u[3], e1[3], e2[3], rho;
+  double r0[3], axis[3], theta;
+  double q0[URT_NJ], dq[URT_NJ], qd0[URT_NJ], qd1[URT_NJ];
+} urt_path_seg_t;
+
+typedef struct urt_path_move {
+  uint64_t id;
+  int32_t kind;                  /* URT_CTRL_* of its command                                 */
+  int32_t joint;                 /* 1: joint space (movej, optimovej)                         */
+  int32_t done;                  /* 1: its id is marked done (blend look-ahead or the end)    */
+  int32_t pad_;
+  double r;                      /* blend radius asked for [m]                                */
+  double a, v;                   /* path acceleration and speed [m/s², m/s or rad/s², rad/s]  */
+  double fa, fv;                 /* optimovel: the fractions (0 otherwise)                    */
+  double chord;                  /* TCP distance from its start to its target [m]             */
+  double zone;                   /* path length from its end at which the blend zone begins  */
+  double end_p[3];               /* TCP position of its target                                */
+  double opt_v, opt_a;           /* optimovel: the tool speed and acceleration the joints allow
+                                    where it runs now (where it will begin, while queued)     */
+} urt_path_move_t;
+
+typedef struct urt_path_state {
+  urt_path_seg_t seg[URT_PATH_SEGS];
+  urt_path_move_t move[2];       /* the running move and the one queued behind it             */
+  int32_t nseg, nmove;
+  int32_t queued_stop;           /* 1: the queued move starts from rest at this one's target  */
+  int32_t pad_;
+  double s, sd;                  /* along the head piece, path speed                          */
+} urt_path_state_t;
+
 typedef union urt_ctrl_motion_state {
   urt_movej_state_t movej;
   urt_movel_state_t movel;
@@ -79,6 +126,7 @@ typedef union urt_ctrl_motion_state {
   urt_freedrive_state_t freedrive;
   urt_servoc_state_t servoc;
   urt_force_state_t force;
+  urt_path_state_t path;
 } urt_ctrl_motion_state_t;
 
 #ifdef __cplusplus
