@@ -146,8 +146,14 @@ typedef enum urt_ctrl_cmd_kind {
                                  levels (the same bits, an integer); a = mask of the analog
                                  inputs to change (bit 0–1 standard 0–1, bit 2–3 tool 0–1),
                                  q[0..3] = their values [V], in [0, 10]                     */
-  URT_CTRL_ZERO_FTSENSOR      /* pose[6] = the raw TCP wrench (snapshot tcp_force_raw) that
+  URT_CTRL_ZERO_FTSENSOR,     /* pose[6] = the raw TCP wrench (snapshot tcp_force_raw) that
                                  reads zero from now on: zero_ftsensor()                     */
+  /* added by the fault issue: live injection (URTWIN_FAULT on LCM) */
+  URT_CTRL_FAULT              /* inject (index 1) or clear (index 0) a fault in the physics;
+                                 fields as urt_fault_cmd_pack (urt/faults.h) writes them. An
+                                 onset before the tick's time starts the profile at the tick.
+                                 Invalid or with URT_MAX_FAULTS installed: refused
+                                 (URT_CTRL_FAULT_BAD_ARGUMENT), counted in faults_refused    */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
@@ -236,6 +242,9 @@ typedef struct urt_ctrl {
   double analog_in[2];        /* standard analog inputs [V]                       */
   double tool_analog_in[2];   /* tool analog inputs [V]                           */
   double ft_bias[6];          /* subtracted from the TCP wrench (ZERO_FTSENSOR) [N, N m] */
+
+  /* added by the fault issue: live fault commands (URT_CTRL_FAULT) applied and refused */
+  uint32_t faults_applied, faults_refused;
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or
