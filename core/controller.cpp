@@ -61,6 +61,7 @@
 #include "motion.hpp"
 #include "step_internal.h"
 #include "urt/controller.h"
+#include "urt/faults.h"
 #include "urt/core.h"
 
 namespace urt::core {
@@ -423,6 +424,26 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         if (am & (1u << k)) {
           (k < 2 ? c->analog_in[k] : c->tool_analog_in[k - 2]) = cmd->q[k];
         }
+      }
+      break;
+    }
+    case URT_CTRL_FAULT: {
+      // live injection: a fault into the physics from this tick on (its onset no earlier than
+      // now), or the faults matching a target cleared; refused whole when invalid or full
+      urt_fault_spec_t f;
+      const int what = urt_fault_cmd_unpack(cmd, &f);
+      int rc = what < 0 ? what : URT_OK;
+      if (what == 1) {
+        f.onset = std::fmax(f.onset, d->t);
+        rc = urt_data_add_fault(m, d, &f);
+      } else if (what == 0) {
+        urt_data_clear_faults(m, d, f.cls, f.joint, f.component);
+      }
+      if (rc != URT_OK) {
+        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
+        c->faults_refused++;
+      } else {
+        c->faults_applied++;
       }
       break;
     }

@@ -9,6 +9,7 @@
 
 #include "urt/core.h"
 #include "integrator.hpp"
+#include "urt/controller.h"
 #include "urt/faults.h"
 
 namespace {
@@ -20,6 +21,8 @@ struct ClassInfo {
   double lo, hi;           // the joint encoder's / the class's range
   double lo_motor, hi_motor;
 };
+
+constexpr double kArcmin = 3.14159265358979323846 / (180.0 * 60.0);  // [rad]
 
 // Ranges: the catalogue's where it gives one [S], else its proposal [P] (faults.md §1).
 constexpr ClassInfo kClasses[URT_FAULT_NCLASSES] = {
@@ -52,13 +55,40 @@ constexpr ClassInfo kClasses[URT_FAULT_NCLASSES] = {
     // a lost or unexpected load: up to the UR5's rated 5 kg [P]; the catalogue's can and axis
     // weights are 0.1–0.5 kg [S,19]
     {"payload", "kg", nullptr, 0.0, 5.0, 0, 0},
+    // appears at the 4 % wear state [S,2]; swept over 0.5–10 arcmin [P]: up to 10 arcmin
+    {"backlash", "rad", nullptr, 0.0, 10.0 * kArcmin, 0, 0},
+    // spall size as amplitude [P]: a pulse up to 10 % of the joint's peak motor torque
+    // k_t i_max (checked per joint)
+    {"wg_bearing", "N m", nullptr, 0.0, 1.0, 0, 0},
+    // catalogue accuracy 1–2 arcmin standard [S,4]; its growth up to 5 arcmin amplitude [P]
+    {"transmission_error", "rad", nullptr, 0.0, 5.0 * kArcmin, 0, 0},
+    // the fraction of counts lost, either encoder, up to one in two [P]
+    {"encoder_missed", "1", "1", 0.0, 0.5, 0.0, 0.5},
 };
 
 constexpr const char* kProfiles[] = {"step", "linear", "exp", "intermittent", "random_walk"};
 
 bool is_encoder(int c) {
   return c == URT_FAULT_ENCODER_BIAS || c == URT_FAULT_ENCODER_DRIFT ||
-         c == URT_FAULT_ENCODER_NOISE || c == URT_FAULT_ENCODER_STUCK;
+         c == URT_FAULT_ENCODER_NOISE || c == URT_FAULT_ENCODER_STUCK ||
+         c == URT_FAULT_ENCODER_MISSED;
+}
+
+// Impacts per radian of the WG against the flexspline that holds the outer race (here fixed, so
+// the race speed f_r is f_WG; faults.md's f_WG (1 + 1/N) is for a turning flexspline): the
+// classic defect frequencies over f_r for n balls and ρ = d cos φ / D, a radial bearing (φ = 0)
+// for the ball's spin [D,12]
+//   BPFO = n/2 (1 − ρ),   BPFI = n/2 (1 + ρ),   BSF = (1 − ρ²)/(2ρ)
+double bearing_rate(const urt_fault_spec_t& f) {
+  const double n = f.balls, r = f.ball_ratio;
+  switch (f.location) {
+    case URT_FAULT_BEARING_INNER:
+      return 0.5 * n * (1.0 + r);
+    case URT_FAULT_BEARING_BALL:
+      return (1.0 - r * r) / (2.0 * r);
+    default:
+      return 0.5 * n * (1.0 - r);
+  }
 }
 
 // The class's severity range for this spec's target.
@@ -70,6 +100,10 @@ void class_range(const urt_model_t* m, const urt_fault_spec_t* f, double* lo, do
   if (f->cls == URT_FAULT_CURRENT_OFFSET) {
     *hi = 0.05 * m->control[f->joint].i_max;
     *lo = -*hi;
+  }
+  if (f->cls == URT_FAULT_WG_BEARING) {
+    *lo = 0.0;
+    *hi = 0.1 * m->motor[f->joint].kt * m->control[f->joint].i_max;
   }
 }
 
@@ -186,6 +220,19 @@ extern "C" const char* urt_fault_spec_invalid(const urt_model_t* m, const urt_fa
       }
     }
   }
+  if (f->cls == URT_FAULT_WG_BEARING) {
+    if (f->location < URT_FAULT_BEARING_OUTER || f->location > URT_FAULT_BEARING_BALL) {
+      return "bearing location must be outer, inner or ball";
+    }
+    if (f->balls < 6 || f->balls > 60) {
+      return "bearing balls must be 6..60";
+    }
+    if (!(f->ball_ratio >= 0.05 && f->ball_ratio <= 0.5)) {
+      return "bearing ball_ratio (d cos(phi) / D) must be in [0.05, 0.5]";
+    }
+  } else if (f->location != 0 || f->balls != 0 || f->ball_ratio != 0.0) {
+    return "only a wg_bearing fault has a location, balls and ball_ratio";
+  }
   if (f->cls == URT_FAULT_COLLISION) {
     const double* u = f->direction;
     double n = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
@@ -195,6 +242,39 @@ extern "C" const char* urt_fault_spec_invalid(const urt_model_t* m, const urt_fa
   }
   return nullptr;
 }
+
+namespace {
+
+// one fault's state from the start, as urt_data_set_faults gives it
+void fault_state_init(urt_fault_state_t& fs, int k) {
+  const urt_fault_spec_t& f = fs.s.f[k];
+  fs.severity[k] = 0.0;
+  fs.onset_time[k] = -1.0;
+  fs.acc[k] = f.profile == URT_FAULT_RANDOM_WALK ? f.severity : 0.0;
+  fs.active[k] = 0;
+  fs.stuck_latched[k] = 0;
+  fs.last_count[k] = 0.0;
+  fs.missed[k] = 0.0;
+  // one generator per fault, so adding a fault does not change another's draws
+  urt_rng_seed(&fs.rng[k], f.seed ^ (0x9e3779b97f4a7c15ull * (uint64_t)(k + 1)));
+}
+
+// move fault `from` to slot `to` with all its state
+void fault_move(urt_fault_state_t& fs, int to, int from) {
+  fs.s.f[to] = fs.s.f[from];
+  fs.severity[to] = fs.severity[from];
+  fs.onset_time[to] = fs.onset_time[from];
+  fs.acc[to] = fs.acc[from];
+  fs.active[to] = fs.active[from];
+  fs.stuck_latched[to] = fs.stuck_latched[from];
+  fs.rng[to] = fs.rng[from];
+  fs.last_count[to] = fs.last_count[from];
+  fs.missed[to] = fs.missed[from];
+}
+
+bool whole(double v) { return std::isfinite(v) && v == std::floor(v); }
+
+}  // namespace
 
 extern "C" int urt_data_set_faults(const urt_model_t* m, urt_data_t* d,
                                    const urt_fault_scenario_t* s) {
@@ -214,14 +294,115 @@ extern "C" int urt_data_set_faults(const urt_model_t* m, urt_data_t* d,
   }
   fs.s = *s;
   for (int k = 0; k < n; k++) {
-    const urt_fault_spec_t& f = fs.s.f[k];
-    fs.onset_time[k] = -1.0;
-    fs.acc[k] = f.profile == URT_FAULT_RANDOM_WALK ? f.severity : 0.0;
-    // one generator per fault, so adding a fault does not change another's draws
-    urt_rng_seed(&fs.rng[k], f.seed ^ (0x9e3779b97f4a7c15ull * (uint64_t)(k + 1)));
+    fault_state_init(fs, k);
   }
   urt_faults_advance(m, d);
   return URT_OK;
+}
+
+extern "C" int urt_data_add_fault(const urt_model_t* m, urt_data_t* d, const urt_fault_spec_t* f) {
+  if (urt_fault_spec_invalid(m, f)) {
+    return URT_EINVAL;
+  }
+  urt_fault_state_t& fs = d->faults;
+  if (fs.s.n >= URT_MAX_FAULTS) {
+    return URT_ENOSPC;
+  }
+  const int k = fs.s.n;
+  fs.s.f[k] = *f;
+  fault_state_init(fs, k);
+  fs.s.n = k + 1;
+  return URT_OK;
+}
+
+extern "C" int urt_data_clear_faults(const urt_model_t* m, urt_data_t* d, int cls, int joint,
+                                     int component) {
+  (void)m;
+  urt_fault_state_t& fs = d->faults;
+  int kept = 0;
+  for (int k = 0; k < fs.s.n; k++) {
+    const urt_fault_spec_t& f = fs.s.f[k];
+    const bool match = (cls < 0 || f.cls == cls) && (joint < 0 || f.joint == joint) &&
+                       (component < 0 || f.component == component);
+    if (!match) {
+      if (kept != k) {
+        fault_move(fs, kept, k);
+      }
+      kept++;
+    }
+  }
+  const int removed = fs.s.n - kept;
+  fs.s.n = kept;
+  if (kept == 0 && removed > 0) {
+    // nothing left: no joint reads fault parameters any more (urt_step stops advancing them)
+    std::memset(&fs, 0, sizeof fs);
+  }
+  return removed;
+}
+
+extern "C" void urt_fault_cmd_pack(const urt_fault_spec_t* f, int inject, urt_ctrl_cmd_t* out) {
+  std::memset(out, 0, sizeof *out);
+  out->kind = URT_CTRL_FAULT;
+  out->index = inject ? 1 : 0;
+  out->q[0] = f->cls;
+  out->q[1] = f->joint;
+  out->q[2] = f->component;
+  out->q[3] = f->profile;
+  out->value = f->severity;
+  out->t = f->onset;
+  out->r = f->ramp;
+  out->a = f->tau;
+  out->v = f->on;
+  out->a_rot = f->off;
+  out->gain = f->sigma;
+  out->tau[0] = (double)f->seed;
+  for (int i = 0; i < 3; i++) {
+    out->pose[i] = f->direction[i];
+    out->pose[3 + i] = f->offset[i];
+  }
+  out->tau[1] = f->location;
+  out->tau[2] = f->balls;
+  out->tau[3] = f->ball_ratio;
+}
+
+extern "C" int urt_fault_cmd_unpack(const urt_ctrl_cmd_t* c, urt_fault_spec_t* f) {
+  if (c->kind != URT_CTRL_FAULT || (c->index != 0 && c->index != 1)) {
+    return URT_EINVAL;
+  }
+  for (int i = 0; i < 4; i++) {
+    if (!whole(c->q[i]) || std::fabs(c->q[i]) > 1e6) {
+      return URT_EINVAL;
+    }
+  }
+  if (!whole(c->tau[0]) || c->tau[0] < 0.0 || c->tau[0] >= 9007199254740992.0 ||
+      !whole(c->tau[1]) || !whole(c->tau[2]) || std::fabs(c->tau[1]) > 1e6 ||
+      std::fabs(c->tau[2]) > 1e6) {
+    return URT_EINVAL;
+  }
+  std::memset(f, 0, sizeof *f);
+  f->cls = (int32_t)c->q[0];
+  f->joint = (int32_t)c->q[1];
+  f->component = (int32_t)c->q[2];
+  if (c->index == 0) {
+    return 0;
+  }
+  f->profile = (int32_t)c->q[3];
+  f->severity = c->value;
+  f->onset = c->t;
+  f->ramp = c->r;
+  f->tau = c->a;
+  f->on = c->v;
+  f->off = c->a_rot;
+  f->sigma = c->gain;
+  f->seed = (uint64_t)c->tau[0];
+  for (int i = 0; i < 3; i++) {
+    f->direction[i] = c->pose[i];
+    f->offset[i] = c->pose[3 + i];
+  }
+  f->location = (int32_t)c->tau[1];
+  f->balls = (int32_t)c->tau[2];
+  f->ball_ratio = c->tau[3];
+  return 1;
 }
 
 extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
@@ -349,6 +530,55 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
           fs.payload_moment[i] += s * f.offset[i];
         }
         break;
+      case URT_FAULT_BACKLASH:
+        e->backlash += s;
+        break;
+      case URT_FAULT_TRANSMISSION_ERROR:
+        e->te_amp += s;
+        break;
+      case URT_FAULT_WG_BEARING:
+        // one spall per joint is modelled: a second one's rate replaces the first's
+        e->wg_pulse += s;
+        e->wg_pulse_rate = bearing_rate(f);
+        break;
+      case URT_FAULT_ENCODER_MISSED: {
+        // the counts the (filtered) reading passed since the last step, each lost with
+        // probability s; lost joint counts stay in the reading (acc), lost motor counts dip this
+        // step's speed, one count over the step each
+        const double* x = d->x[j];
+        const urt_sensors_params_t& sp = m->sensors[j];
+        const double lsb = motor ? sp.lsb_w * h : sp.lsb_q;
+        const double now = std::floor((motor ? x[URT_X_QM] : x[URT_X_P]) / lsb + 0.5);
+        if (!fs.stuck_latched[k]) {
+          fs.last_count[k] = now;  // the first step counts from here (the latch marks it)
+          fs.stuck_latched[k] = 1;
+        }
+        const double passed = now - fs.last_count[k];
+        fs.last_count[k] = now;
+        double lost = 0.0;
+        if (active && s > 0.0 && passed != 0.0) {
+          const double n_c = std::fabs(passed);
+          if (n_c <= 32.0) {
+            // one draw per count: 53 random bits against s
+            for (int c = 0; c < (int)n_c; c++) {
+              lost += (double)(urt_rng_next(&fs.rng[k]) >> 11) * 0x1.0p-53 < s ? 1.0 : 0.0;
+            }
+          } else {
+            // many counts in one step (a fast motor): the binomial's normal approximation
+            const double mu = n_c * s, sd = std::sqrt(n_c * s * (1.0 - s));
+            const double draw = std::nearbyint(mu + sd * urt_rng_normal(&fs.rng[k]));
+            lost = std::fmin(n_c, std::fmax(0.0, draw));
+          }
+          lost = std::copysign(lost, passed);
+        }
+        if (motor) {
+          e->qdm_missed += lost * sp.lsb_w;
+        } else {
+          fs.missed[k] += lost * lsb;
+          e->q_bias -= fs.missed[k];
+        }
+        break;
+      }
       case URT_FAULT_COLLISION:
         for (int i = 0; i < 3; i++) {
           fs.wrench[i] += s * f.direction[i];

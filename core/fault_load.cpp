@@ -25,7 +25,8 @@ using namespace config;
 
 bool is_encoder(int c) {
   return c == URT_FAULT_ENCODER_BIAS || c == URT_FAULT_ENCODER_DRIFT ||
-         c == URT_FAULT_ENCODER_NOISE || c == URT_FAULT_ENCODER_STUCK;
+         c == URT_FAULT_ENCODER_NOISE || c == URT_FAULT_ENCODER_STUCK ||
+         c == URT_FAULT_ENCODER_MISSED;
 }
 
 [[noreturn]] void fail_at(const Field& item, const char* key, const std::string& reason) {
@@ -106,7 +107,8 @@ void parse_profile(const Field& pf, urt_fault_spec_t* s) {
 
 void parse_fault(const urt_model_t* m, const Field& item, urt_fault_spec_t* s) {
   Map f = item.map({"class", "severity", "unit", "profile"},
-                   {"joint", "component", "direction", "offset", "seed"});
+                   {"joint", "component", "direction", "offset", "seed", "location", "balls",
+                    "ball_ratio"});
   std::memset(s, 0, sizeof *s);
   s->cls = parse_class(f["class"]);
   const char* cname = urt_fault_class_name(s->cls);
@@ -159,9 +161,31 @@ void parse_fault(const urt_model_t* m, const Field& item, urt_fault_spec_t* s) {
   } else if (const Field* v = f.get("offset")) {
     v->fail("only a payload fault has an offset");
   }
+  if (s->cls == URT_FAULT_WG_BEARING) {
+    // the bearing's geometry: where the spall is, and what sets its impact rate
+    const char* keys[] = {"location", "balls", "ball_ratio"};
+    for (const char* key : keys) {
+      if (!f.get(key)) {
+        fail_at(item, key, "missing key (a wg_bearing fault needs location, balls, ball_ratio)");
+      }
+    }
+    const std::string loc = f["location"].choice({"outer", "inner", "ball"});
+    s->location = loc == "outer"   ? URT_FAULT_BEARING_OUTER
+                  : loc == "inner" ? URT_FAULT_BEARING_INNER
+                                   : URT_FAULT_BEARING_BALL;
+    s->balls = (int32_t)f["balls"].integer(6, 60);
+    s->ball_ratio = f["ball_ratio"].number(in(0.05, 0.5));
+  } else {
+    for (const char* key : {"location", "balls", "ball_ratio"}) {
+      if (const Field* v = f.get(key)) {
+        v->fail("only a wg_bearing fault has a location, balls and ball_ratio");
+      }
+    }
+  }
   if (const Field* v = f.get("seed")) {
-    if (s->cls != URT_FAULT_ENCODER_NOISE) {
-      v->fail("only encoder_noise draws with a seed of its own (a random_walk profile takes one)");
+    if (s->cls != URT_FAULT_ENCODER_NOISE && s->cls != URT_FAULT_ENCODER_MISSED) {
+      v->fail("only encoder_noise and encoder_missed draw with a seed of their own (a "
+              "random_walk profile takes one)");
     }
     s->seed = v->integer(0, UINT64_MAX);
   }

@@ -46,8 +46,10 @@ void joint_w_init(const urt_model_t* m, int j, int kind, const JointAux& aux, do
   w->tab = &tab->t[j][kind][aux.active_set];
   w->engaged = m->drives_engaged;
   w->gh = kGamma * tab->h[kind];
-  w->k_cs = m->gear[j].k_cs;
-  w->c_cs = m->gear[j].c_cs;
+  // in a backlash gap the output spring carries nothing (its tables are the gap set's)
+  const bool gap = (aux.active_set & kGearGap) != 0;
+  w->k_cs = gap ? 0.0 : m->gear[j].k_cs;
+  w->c_cs = gap ? 0.0 : m->gear[j].c_cs;
 
   // LuGre linearisation: T_f = σ0 z + σ1 ż, ż = q̇ − σ0 |q̇| z / g
   // ∂ż/∂q̇ = 1 − σ0 z ∂(|q̇|/g)/∂q̇ jumps with sgn(q̇) at rest (0 ↔ 2 for a loaded bristle).

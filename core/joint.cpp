@@ -40,7 +40,8 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
   if (fj) {
     // sensor faults: the measurement chain's gain, offset, bias, noise, or a stuck value
     i_fb = fj->i_gain * (ss.i_f + in.eps_i) + in.i_offset + fj->i_bias;
-    qdm_fb = fj->qdm_stuck ? fj->qdm_hold : qdm_fb + fj->qdm_bias + fj->qdm_noise;
+    qdm_fb = fj->qdm_stuck ? fj->qdm_hold
+                           : qdm_fb + fj->qdm_bias + fj->qdm_noise - fj->qdm_missed;
     q_fb = fj->q_stuck ? fj->q_hold : q_fb + fj->q_bias + fj->q_noise;
   }
 
@@ -77,6 +78,49 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
     gq = &cracked;
   }
   urt_harmonic_drive_out_t go = urt_harmonic_drive_eval_inline(gq, &gs, &ge);
+
+  // gear faults on the output spring: a kinematic error shifts where the CS drives the joint,
+  // backlash opens a dead zone in the spring (nothing is carried inside it); the tables' forced
+  // sets take the gap as k_CS = c_CS = 0
+  int gap = forced != kNatural && (forced & kGearGap) != 0;
+  int gap_tables = gap;
+  if (fj && forced == kNatural && (fj->backlash > 0.0 || fj->te_amp != 0.0)) {
+    double e = gs.q_cs - ge.q, ed = gs.qd_cs - ge.qd;
+    if (fj->te_amp != 0.0) {
+      e += fj->te_amp * std::sin(2.0 * gs.q_wg);
+      ed += 2.0 * fj->te_amp * std::cos(2.0 * gs.q_wg) * gs.qd_wg;
+    }
+    const double half = 0.5 * fj->backlash;
+    if (e > half) {
+      e -= half;
+    } else if (e < -half) {
+      e += half;
+    } else {
+      gap = 1;
+      // the gap's tables only while the spring stays open over a whole step at this rate: a
+      // step that may close it keeps the contact's W (stiff), or the spring's force would come
+      // in explicitly and ring
+      gap_tables = std::fabs(e) + std::fabs(ed) * m->dt < half;
+    }
+    if (!gap) {
+      const double t_cs = gp.k_cs * e + gp.c_cs * ed;
+      go.d.qd_cs += (go.t_cs - t_cs) / gp.j_cs;
+      go.t_cs = t_cs;
+    }
+  }
+  if (gap) {
+    go.d.qd_cs += go.t_cs / gp.j_cs;
+    go.t_cs = 0.0;
+  }
+  if (fj && fj->wg_pulse > 0.0) {
+    // a WG-bearing spall: a torque pulse against the WG's turning each time a ball passes it,
+    // ((1 + cos φ)/2)^8 in the impact phase φ = rate·q_WG (one pulse per impact, its harmonics
+    // falling off), its sign the WG's direction, smoothed over 1 rad/s of WG speed
+    const double c = 0.5 * (1.0 + std::cos(fj->wg_pulse_rate * gs.q_wg));
+    const double c2 = c * c, c4 = c2 * c2;
+    const double dir = gs.qd_wg / (std::fabs(gs.qd_wg) + 1.0);
+    go.d.qd_wg -= fj->wg_pulse * c4 * c4 * dir / gp.j_wg;
+  }
   urt_motor_deriv_t md = urt_motor_deriv_inline(&mp, &ms, co.v_sup, go.t_in);
   urt_sensors_state_t sd = urt_sensors_deriv_inline(&m->sensors[j], &ss, ms.i, ms.qd_m, x[URT_X_Q]);
 
@@ -116,7 +160,8 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
     aux->qdm_fb = qdm_fb;
     aux->q_fb = q_fb;
     // torque mode has the current-saturated structure: i_ref independent of the state, ξ_v held
-    aux->active_set = (co.i_sat || in.torque ? kCurrentSat : 0) | (co.v_sat ? kVoltageSat : 0);
+    aux->active_set = (co.i_sat || in.torque ? kCurrentSat : 0) | (co.v_sat ? kVoltageSat : 0) |
+                      (gap_tables ? kGearGap : 0);
   }
 }
 

@@ -18,7 +18,11 @@ enum ActiveSet : int {
   kCurrentSat = 1,   // i_ref at ±i_max, ξ_v held
   kVoltageSat = 2,   // V at ±V_net, ξ_c held
   kBothSat = 3,
-  kNumActiveSets = 4,
+  // a backlash fault's dead zone: the gear's output spring carries nothing (T_CS = 0), so the
+  // drive block is affine again, with k_CS = c_CS = 0 (in contact it is the healthy block with
+  // a constant offset, the healthy tables)
+  kGearGap = 4,
+  kNumActiveSets = 8,
   kNatural = -1
 };
 

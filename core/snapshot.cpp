@@ -33,6 +33,7 @@
 #include "urt/core.h"
 #include "urt/drivers/friction.h"
 #include "urt/snapshot.h"
+#include "urt/faults.h"
 
 namespace {
 
@@ -269,6 +270,11 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   s->motion = c->motion;
   s->motion_id = c->motion_id;
   s->motion_done_id = c->motion_done_id;
+
+  // the faults' ground truth, and what became of the live fault commands
+  urt_faults_truth(m, d, &s->fault_truth);
+  s->faults_applied = c->faults_applied;
+  s->faults_refused = c->faults_refused;
 
   // the loop's own diagnostics: written by the loop after this call
   s->exec_time = 0.0;

@@ -45,7 +45,7 @@ WINDOW_S = 0.5
 MARGIN = 1.2
 
 
-PERIODIC = {"crack"}   # classes whose signature is a spectral line
+PERIODIC = {"crack", "wg_bearing", "transmission_error"}   # signatures that are spectral lines
 
 
 def healthy_twin(sweep, side, cache={}):

@@ -167,13 +167,17 @@ void print_lcm_stats(const urt_lcm_bridge_t* b) {
   std::fprintf(stderr,
                "urtwin: lcm: status %llu (lost ticks %llu), drive %llu, publish errors %llu, "
                "commands received %llu accepted %llu rejected %llu dropped %llu, inputs "
-               "received %llu accepted %llu rejected %llu dropped %llu\n",
+               "received %llu accepted %llu rejected %llu dropped %llu, faults received %llu "
+               "accepted %llu rejected %llu dropped %llu, fault truth %llu\n",
                (unsigned long long)n.status_sent, (unsigned long long)n.ticks_lost,
                (unsigned long long)n.drive_sent, (unsigned long long)n.publish_errors,
                (unsigned long long)n.cmd_received, (unsigned long long)n.cmd_accepted,
                (unsigned long long)n.cmd_rejected, (unsigned long long)n.cmd_dropped,
                (unsigned long long)n.io_received, (unsigned long long)n.io_accepted,
-               (unsigned long long)n.io_rejected, (unsigned long long)n.io_dropped);
+               (unsigned long long)n.io_rejected, (unsigned long long)n.io_dropped,
+               (unsigned long long)n.fault_received, (unsigned long long)n.fault_accepted,
+               (unsigned long long)n.fault_rejected, (unsigned long long)n.fault_dropped,
+               (unsigned long long)n.truth_sent);
 }
 
 // one line the tests parse: "urtwin: dds: ticks N lost N drive N/N lost N, write errors N,
@@ -228,7 +232,7 @@ int main(int argc, char** argv) {
   app.add_flag("--lcm", o.lcm, "publish status and drive messages on LCM, take commands");
   app.add_option("--lcm-url", o.lcm_url, "LCM provider URL (ttl=0 keeps traffic on this host)")
       ->capture_default_str();
-  app.add_option("--lcm-prefix", o.lcm_prefix, "channel prefix: PREFIX_STATUS, _DRIVE, _COMMAND, _IO")
+  app.add_option("--lcm-prefix", o.lcm_prefix, "channel prefix: PREFIX_STATUS, _DRIVE, _COMMAND, _IO, _FAULT, _FAULT_TRUTH")
       ->capture_default_str();
   app.add_flag("--dds", o.dds, "publish the UR ROS 2 driver's topics on Cyclone DDS, take "
                "forward and trajectory commands");
@@ -432,8 +436,11 @@ int main(int argc, char** argv) {
     urt_lcm_config_default(&bc);
     bc.url = o.lcm_url.c_str();
     std::string st = o.lcm_prefix + "_STATUS", dr = o.lcm_prefix + "_DRIVE",
-                cm = o.lcm_prefix + "_COMMAND", io = o.lcm_prefix + "_IO";
+                cm = o.lcm_prefix + "_COMMAND", io = o.lcm_prefix + "_IO",
+                fa = o.lcm_prefix + "_FAULT", ft = o.lcm_prefix + "_FAULT_TRUTH";
     bc.status_channel = st.c_str();
+    bc.fault_channel = fa.c_str();
+    bc.fault_truth_channel = ft.c_str();
     bc.drive_channel = dr.c_str();
     bc.command_channel = cm.c_str();
     bc.io_channel = io.c_str();

@@ -26,17 +26,19 @@ typedef struct counters {
       publish_errors;
   _Atomic uint64_t cmd_received, cmd_accepted, cmd_rejected, cmd_dropped, last_tick;
   _Atomic uint64_t io_received, io_accepted, io_rejected, io_dropped;
+  _Atomic uint64_t fault_received, fault_accepted, fault_rejected, fault_dropped, truth_sent;
 } counters_t;
 
 struct urt_lcm_bridge {
   urt_lcm_source_t src;
   char *url, *status_channel, *drive_channel, *command_channel, *io_channel;
+  char *fault_channel, *truth_channel;
   double drive_rate;
   int lockstep;
 
   lcm_t *pub;                 /* publisher thread only (lcm_publish is thread-safe anyway) */
   lcm_t *sub;                 /* subscriber thread only; NULL without a command channel     */
-  lcm_subscription_t *subscription, *io_subscription;
+  lcm_subscription_t *subscription, *io_subscription, *fault_subscription;
 
   pthread_t pub_thread, sub_thread;
   int pub_running, sub_running;
@@ -85,6 +87,7 @@ typedef struct pub_state {
   urtwin_lcmt_urtwin_status last;  /* the newest status sent (lockstep repeats)   */
   int have_last;
   int64_t last_sent_utime;         /* wall clock of the last status sent [us]      */
+  urt_lcm_fault_truth_buf_t truth; /* the fault truth's message and arrays         */
 } pub_state_t;
 
 static void send_status(urt_lcm_bridge_t *b, pub_state_t *ps, urtwin_lcmt_urtwin_status *msg,
@@ -96,6 +99,17 @@ static void send_status(urt_lcm_bridge_t *b, pub_state_t *ps, urtwin_lcmt_urtwin
     bump(counter, 1);
   }
   ps->last_sent_utime = msg->publish_utime;
+}
+
+// the tick's fault truth, beside its status (the buffer holds the largest message: 16 faults)
+static void send_truth(urt_lcm_bridge_t *b, pub_state_t *ps, const urt_snapshot_t *snap) {
+  urt_lcm_fault_truth_fill(snap, &ps->truth);
+  int len = urtwin_lcmt_urtwin_fault_truth_encode(ps->buf, 0, ps->cap, &ps->truth.msg);
+  if (len < 0 || lcm_publish(b->pub, b->truth_channel, ps->buf, (unsigned)len) != 0) {
+    bump(&b->n.publish_errors, 1);
+  } else {
+    bump(&b->n.truth_sent, 1);
+  }
 }
 
 // publish every tick in [next_tick, newest]; skip (and count) ticks already overwritten
@@ -123,6 +137,9 @@ static void publish_ticks(urt_lcm_bridge_t *b, pub_state_t *ps, uint64_t newest)
     // fill, encode into the thread's buffer, send
     urt_lcm_status_fill(&snap, wall_utime(), (int64_t)atomic_load(&b->n.ticks_lost), &msg);
     send_status(b, ps, &msg, &b->n.status_sent);
+    if (b->truth_channel[0] != '\0') {
+      send_truth(b, ps, &snap);
+    }
     if (b->lockstep) {
       ps->last = msg;
       ps->have_last = 1;
@@ -191,6 +208,9 @@ static void *pub_main(void *arg) {
     fprintf(stderr, "urt_lcm: message larger than the encode buffer (%d bytes)\n", ps.cap);
     return NULL;
   }
+  // the fault truth varies in size, at most 16 faults of about 50 bytes each (a class name of
+  // at most 19 characters, 25 bytes of numbers) plus 44: the whole buffer holds it with room
+  ps.cap = (int)sizeof buf;
 
   // start at the newest tick and drive sample (what a late subscriber would see first)
   uint64_t newest = b->src.wait(b->src.ctx, 0, 0);
@@ -264,6 +284,24 @@ static void on_io(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
   bump(&b->n.io_accepted, 1);
 }
 
+// Live faults: one URT_CTRL_FAULT on the same ring, checked against the model first (a refusal
+// is counted here, and nothing reaches the physics); never grants a tick.
+static void on_fault(const lcm_recv_buf_t *rbuf, const char *channel, void *user) {
+  (void)channel;
+  urt_lcm_bridge_t *b = user;
+  urt_ctrl_cmd_t cmd;
+  bump(&b->n.fault_received, 1);
+  if (urt_lcm_fault_decode(rbuf->data, rbuf->data_size, b->src.model, &cmd) != 0) {
+    bump(&b->n.fault_rejected, 1);
+    return;
+  }
+  if (!b->src.submit(b->src.ctx, &cmd)) {
+    bump(&b->n.fault_dropped, 1);
+    return;
+  }
+  bump(&b->n.fault_accepted, 1);
+}
+
 static void *sub_main(void *arg) {
   urt_lcm_bridge_t *b = arg;
   while (!atomic_load(&b->stop)) {
@@ -290,6 +328,9 @@ static void free_bridge(urt_lcm_bridge_t *b) {
     if (b->io_subscription != NULL) {
       lcm_unsubscribe(b->sub, b->io_subscription);
     }
+    if (b->fault_subscription != NULL) {
+      lcm_unsubscribe(b->sub, b->fault_subscription);
+    }
     lcm_destroy(b->sub);
   }
   if (b->pub != NULL) {
@@ -303,6 +344,8 @@ static void free_bridge(urt_lcm_bridge_t *b) {
   free(b->drive_channel);
   free(b->command_channel);
   free(b->io_channel);
+  free(b->fault_channel);
+  free(b->truth_channel);
   free(b);
 }
 
@@ -346,8 +389,11 @@ int urt_lcm_bridge_create_source(const urt_lcm_source_t *src, const urt_lcm_conf
   b->drive_channel = dup_or(cfg->drive_channel, URT_LCM_DEFAULT_DRIVE);
   b->command_channel = dup_or(cfg->command_channel, URT_LCM_DEFAULT_COMMAND);
   b->io_channel = dup_or(cfg->io_channel, URT_LCM_DEFAULT_IO);
+  b->fault_channel = dup_or(cfg->fault_channel, URT_LCM_DEFAULT_FAULT);
+  b->truth_channel = dup_or(cfg->fault_truth_channel, URT_LCM_DEFAULT_FAULT_TRUTH);
   if (b->url == NULL || b->status_channel == NULL || b->drive_channel == NULL ||
-      b->command_channel == NULL || b->io_channel == NULL) {
+      b->command_channel == NULL || b->io_channel == NULL || b->fault_channel == NULL ||
+      b->truth_channel == NULL) {
     free_bridge(b);
     return URT_ENOMEM;
   }
@@ -356,7 +402,9 @@ int urt_lcm_bridge_create_source(const urt_lcm_source_t *src, const urt_lcm_conf
   if (strlen(b->status_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
       strlen(b->drive_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
       strlen(b->command_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
-      strlen(b->io_channel) > LCM_MAX_CHANNEL_NAME_LENGTH) {
+      strlen(b->io_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
+      strlen(b->fault_channel) > LCM_MAX_CHANNEL_NAME_LENGTH ||
+      strlen(b->truth_channel) > LCM_MAX_CHANNEL_NAME_LENGTH) {
     set_err(err, err_sz, "lcm: channel names are limited to %s characters", "63");
     free_bridge(b);
     return URT_EINVAL;
@@ -371,7 +419,8 @@ int urt_lcm_bridge_create_source(const urt_lcm_source_t *src, const urt_lcm_conf
     free_bridge(b);
     return URT_EIO;
   }
-  if (b->command_channel[0] != '\0' || b->io_channel[0] != '\0') {
+  if (b->command_channel[0] != '\0' || b->io_channel[0] != '\0' ||
+      b->fault_channel[0] != '\0') {
     b->sub = lcm_create(b->url);
     bool ok = b->sub != NULL;
     if (ok && b->command_channel[0] != '\0') {
@@ -381,6 +430,10 @@ int urt_lcm_bridge_create_source(const urt_lcm_source_t *src, const urt_lcm_conf
     if (ok && b->io_channel[0] != '\0') {
       b->io_subscription = lcm_subscribe(b->sub, b->io_channel, on_io, b);
       ok = b->io_subscription != NULL;
+    }
+    if (ok && b->fault_channel[0] != '\0') {
+      b->fault_subscription = lcm_subscribe(b->sub, b->fault_channel, on_fault, b);
+      ok = b->fault_subscription != NULL;
     }
     if (!ok) {
       set_err(err, err_sz, "lcm: cannot subscribe on %s", b->url);
@@ -463,5 +516,10 @@ void urt_lcm_bridge_get_stats(const urt_lcm_bridge_t *b, urt_lcm_stats_t *out) {
   out->io_accepted = atomic_load(&n->io_accepted);
   out->io_rejected = atomic_load(&n->io_rejected);
   out->io_dropped = atomic_load(&n->io_dropped);
+  out->fault_received = atomic_load(&n->fault_received);
+  out->fault_accepted = atomic_load(&n->fault_accepted);
+  out->fault_rejected = atomic_load(&n->fault_rejected);
+  out->fault_dropped = atomic_load(&n->fault_dropped);
+  out->truth_sent = atomic_load(&n->truth_sent);
   out->last_tick = atomic_load(&n->last_tick);
 }

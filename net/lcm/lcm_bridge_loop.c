@@ -54,6 +54,6 @@ int urt_lcm_bridge_create(urt_loop_t *loop, const urt_lcm_config_t *cfg, urt_lcm
   s->loop = loop;
   s->producer = producer;
   urt_lcm_source_t src = {s,          src_wait,  src_read, src_latest_drive, src_read_drive,
-                          src_submit, src_grant, free};
+                          src_submit, src_grant, free, urt_loop_model(loop)};
   return urt_lcm_bridge_create_source(&src, cfg, out, err, err_sz);
 }

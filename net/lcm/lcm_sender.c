@@ -197,3 +197,147 @@ int urt_lcm_io_decode(const void *buf, size_t len, urt_ctrl_cmd_t *out) {
   *out = c;
   return 0;
 }
+
+//---- faults -----------------------------------------------------------------------------------
+
+// index of name in a table of names (n entries from get(i)), or -1
+static int name_index(const char *name, const char *(*get)(int), int n) {
+  for (int i = 0; name != NULL && i < n; i++) {
+    if (strcmp(name, get(i)) == 0) {
+      return i;
+    }
+  }
+  return -1;
+}
+
+static const char *location_name(int i) {
+  static const char *const kNames[] = {"outer", "inner", "ball"};
+  return kNames[i];
+}
+
+static int fault_from_msg(const urtwin_lcmt_urtwin_fault *msg, const urt_model_t *m,
+                          urt_ctrl_cmd_t *out) {
+  urt_fault_spec_t f;
+  memset(&f, 0, sizeof f);
+  if (msg->inject != 0 && msg->inject != 1) {
+    return URT_ERANGE;
+  }
+
+  // clearing: "" / −1 match any
+  if (msg->inject == 0) {
+    const int any_class = msg->fault_class == NULL || msg->fault_class[0] == '\0';
+    f.cls = any_class ? -1 : name_index(msg->fault_class, urt_fault_class_name,
+                                        urt_fault_class_count());
+    if (!any_class && f.cls < 0) {
+      return URT_ERANGE;
+    }
+    if (msg->joint < -1 || msg->joint >= URT_NJ || msg->component < -1 || msg->component > 1) {
+      return URT_ERANGE;
+    }
+    f.joint = msg->joint;
+    f.component = msg->component;
+    urt_fault_cmd_pack(&f, 0, out);
+    return 0;
+  }
+
+  // injection: names to numbers, then the scenario file's checks
+  f.cls = name_index(msg->fault_class, urt_fault_class_name, urt_fault_class_count());
+  f.profile = name_index(msg->profile, urt_fault_profile_name, 5);
+  if (f.cls < 0 || f.profile < 0) {
+    return URT_ERANGE;
+  }
+  const int at_tcp = f.cls == URT_FAULT_COLLISION || f.cls == URT_FAULT_PAYLOAD;
+  f.joint = at_tcp ? 0 : msg->joint;
+  if (at_tcp && msg->joint != -1 && msg->joint != 0) {
+    return URT_ERANGE;
+  }
+  f.component = msg->component;
+  f.severity = msg->severity;
+  f.onset = msg->onset;
+  f.ramp = msg->ramp;
+  f.tau = msg->tau;
+  f.on = msg->on;
+  f.off = msg->off;
+  f.sigma = msg->sigma;
+  if (msg->seed < 0 || msg->seed >= (INT64_C(1) << 53)) {
+    return URT_ERANGE;
+  }
+  f.seed = (uint64_t)msg->seed;
+  if (f.cls == URT_FAULT_COLLISION) {
+    const double *u = msg->direction;
+    double n = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    if (!(n > 0.0) || !isfinite(n)) {
+      return URT_ERANGE;
+    }
+    for (int i = 0; i < 3; i++) {
+      f.direction[i] = u[i] / n;
+    }
+  }
+  if (f.cls == URT_FAULT_PAYLOAD) {
+    memcpy(f.offset, msg->offset, sizeof f.offset);
+  }
+  if (f.cls == URT_FAULT_WG_BEARING) {
+    f.location = name_index(msg->location, location_name, 3);
+    if (f.location < 0) {
+      return URT_ERANGE;
+    }
+    f.balls = msg->balls;
+    f.ball_ratio = msg->ball_ratio;
+  } else if ((msg->location != NULL && msg->location[0] != '\0') || msg->balls != 0 ||
+             msg->ball_ratio != 0.0) {
+    return URT_ERANGE;
+  }
+  if (m != NULL && urt_fault_spec_invalid(m, &f) != NULL) {
+    return URT_ERANGE;
+  }
+  if (m == NULL && !(isfinite(f.severity) && isfinite(f.onset))) {
+    return URT_ERANGE;
+  }
+  urt_fault_cmd_pack(&f, 1, out);
+  return 0;
+}
+
+int urt_lcm_fault_decode(const void *buf, size_t len, const urt_model_t *m, urt_ctrl_cmd_t *out) {
+  if (len > (size_t)INT32_MAX) {
+    return URT_EPROTO;
+  }
+  urtwin_lcmt_urtwin_fault msg;
+  memset(&msg, 0, sizeof msg);
+  // (on a failed decode the strings read so far are allocated and the rest NULL: the cleanup
+  // frees them either way)
+  int used = urtwin_lcmt_urtwin_fault_decode(buf, 0, (int)len, &msg);
+  urt_ctrl_cmd_t c;
+  int rc = used == (int)len ? fault_from_msg(&msg, m, &c) : URT_EPROTO;
+  urtwin_lcmt_urtwin_fault_decode_cleanup(&msg);
+  if (rc == 0) {
+    *out = c;
+  }
+  return rc;
+}
+
+void urt_lcm_fault_truth_fill(const urt_snapshot_t *s, urt_lcm_fault_truth_buf_t *b) {
+  const urt_fault_truth_t *t = &s->fault_truth;
+  const int n = t->n < 0 ? 0 : (t->n > URT_MAX_FAULTS ? URT_MAX_FAULTS : t->n);
+  urtwin_lcmt_urtwin_fault_truth *msg = &b->msg;
+  msg->utime = (int64_t)llround(s->time * 1e6);
+  msg->tick = (int64_t)s->tick;
+  msg->sim_time = s->sim_time;
+  msg->faults_applied = (int32_t)s->faults_applied;
+  msg->faults_refused = (int32_t)s->faults_refused;
+  msg->num_faults = n;
+  for (int k = 0; k < n; k++) {
+    const int at_tcp = t->cls[k] == URT_FAULT_COLLISION || t->cls[k] == URT_FAULT_PAYLOAD;
+    b->fault_class[k] = (char *)urt_fault_class_name(t->cls[k]);
+    b->joint[k] = at_tcp ? -1 : t->joint[k];
+    b->component[k] = t->component[k];
+    b->active[k] = (int8_t)t->active[k];
+    b->severity[k] = t->severity[k];
+    b->onset[k] = t->onset[k];
+  }
+  msg->fault_class = b->fault_class;
+  msg->joint = b->joint;
+  msg->component = b->component;
+  msg->active = b->active;
+  msg->severity = b->severity;
+  msg->onset = b->onset;
+}

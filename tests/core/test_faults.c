@@ -283,6 +283,161 @@ static void test_faults__crack_puts_a_current_line_at_twice_the_wave_generator_f
   urt_model_free(m);
 }
 
+/* a healthy and a faulted run of joint j from the same start, the set-point moving at v for
+ * `t1` seconds and then at −v for `t2` (t2 = 0: no reversal); each run's motor angle and joint
+ * angle at the end of each leg go to qm[run][leg], q[run][leg] */
+static void reversal_runs(const urt_fault_spec_t *f, int n, int j, double v, double t1, double t2,
+                          double qm[2][2], double q[2][2], urt_model_t **m_out) {
+  urt_model_t *m = urt_test_model(urt_test_quiet);
+  for (int r = 0; r < 2; r++) {
+    urt_data_t *d = new_data(m);
+    if (r) {
+      install(m, d, f, n);
+    }
+    d->cmd.qd[j] = v;
+    run(m, d, t1);
+    qm[r][0] = d->x[j][URT_X_QM];
+    q[r][0] = d->x[j][URT_X_Q];
+    d->cmd.qd[j] = -v;
+    run(m, d, t2);
+    qm[r][1] = d->x[j][URT_X_QM];
+    q[r][1] = d->x[j][URT_X_Q];
+    assert_int_equal(d->pstop, 0);
+    free(d);
+  }
+  *m_out = m;
+}
+
+static void test_faults__backlash_is_lost_motion_of_its_width_at_a_reversal(void **state) {
+  (void)state;
+  // the base joint turns at 0.2 rad/s, then back: with a dead zone δ in the output spring the
+  // motor must turn δ (output side) further before the joint follows the other way, the
+  // definition of lost motion. Measured as the change across the reversal of the faulted run's
+  // motor angle minus the healthy run's, over the static motor/joint ratio of the healthy run
+  const int j = 0;
+  const double delta = 5.0 * M_PI / (180.0 * 60.0);  // 5 arcmin
+  urt_fault_spec_t f = spec(URT_FAULT_BACKLASH, j, delta);
+  double qm[2][2], q[2][2];
+  urt_model_t *m;
+  reversal_runs(&f, 1, j, 0.2, 0.6, 0.6, qm, q, &m);
+  const double ratio = (qm[0][1] - qm[0][0]) / (q[0][1] - q[0][0]);
+  const double before = (qm[1][0] - qm[0][0]) / ratio, after = (qm[1][1] - qm[0][1]) / ratio;
+  print_message("static ratio %.4f; joint angles faulted - healthy %.2e, %.2e rad\n", ratio,
+                q[1][0] - q[0][0], q[1][1] - q[0][1]);
+  expect_rel("lost motion at the reversal", before - after, delta, 0.10);
+  urt_model_free(m);
+}
+
+static void test_faults__transmission_error_is_the_2_f_wg_harmonic_of_its_amplitude(
+    void **state) {
+  (void)state;
+  // the base joint at 0.05 rad/s: the output encoder minus the motor angle over the static
+  // ratio (how a gear's transmission error is measured), faulted minus healthy, fitted to
+  // sin and cos of twice the WG angle: amplitude A at phase 0 within 5 %, nothing left over
+  const int j = 0;
+  const double a = 2.0 * M_PI / (180.0 * 60.0);  // 2 arcmin
+  urt_fault_spec_t f = spec(URT_FAULT_TRANSMISSION_ERROR, j, a);
+  urt_model_t *m = urt_test_model(urt_test_quiet);
+  urt_data_t *h = new_data(m), *d = new_data(m);
+  install(m, d, &f, 1);
+  h->cmd.qd[j] = d->cmd.qd[j] = 0.05;
+  run(m, h, 0.5);
+  run(m, d, 0.5);
+  enum { kN = 1500, kDec = 20 };  // 1.5 s at 1 kHz
+  static double dq[kN], dqm[kN], wg[kN];
+  const double qm0 = h->x[j][URT_X_QM], q0 = h->x[j][URT_X_Q];
+  for (int k = 0; k < kN; k++) {
+    for (int s = 0; s < kDec; s++) {
+      assert_int_equal(urt_step(m, h), URT_OK);
+      assert_int_equal(urt_step(m, d), URT_OK);
+    }
+    dq[k] = d->x[j][URT_X_Q] - h->x[j][URT_X_Q];
+    dqm[k] = d->x[j][URT_X_QM] - h->x[j][URT_X_QM];
+    wg[k] = d->x[j][URT_X_QWG];
+  }
+  const double ratio = (h->x[j][URT_X_QM] - qm0) / (h->x[j][URT_X_Q] - q0);
+  double ss = 0, sc = 0, cc = 0, ys = 0, yc = 0, yy = 0;
+  for (int i = 0; i < kN; i++) {
+    const double y = dq[i] - dqm[i] / ratio;
+    const double sn = sin(2.0 * wg[i]), cs = cos(2.0 * wg[i]);
+    ss += sn * sn;
+    sc += sn * cs;
+    cc += cs * cs;
+    ys += y * sn;
+    yc += y * cs;
+    yy += y * y;
+  }
+  const double det = ss * cc - sc * sc;
+  const double b_s = (ys * cc - yc * sc) / det, b_c = (yc * ss - ys * sc) / det;
+  const double resid = sqrt(fmax(0.0, yy - (b_s * ys + b_c * yc)) / kN);
+  print_message("ratio %.4f; fit %.4e sin + %.4e cos (A = %.4e rad); residual rms %.2e\n", ratio,
+                b_s, b_c, a, resid);
+  expect_rel("transmission error at 2 q_WG", b_s, a, 0.05);
+  assert_true(fabs(b_c) < 0.05 * a);
+  assert_true(resid < 0.1 * a);
+  assert_int_equal(d->pstop, 0);
+  free(h);
+  free(d);
+  urt_model_free(m);
+}
+
+/* the strongest line of x (kN samples at rate fs) between f_lo and f_hi, Hann window */
+static double strongest_line(const double *x, int n, double fs, double f_lo, double f_hi,
+                             double df) {
+  double best = 0.0, f_best = 0.0;
+  for (double fr = f_lo; fr < f_hi; fr += df) {
+    double re = 0.0, im = 0.0;
+    for (int k = 0; k < n; k++) {
+      double w = 0.5 - 0.5 * cos(2.0 * M_PI * k / (n - 1));
+      double ph = 2.0 * M_PI * fr * k / fs;
+      re += w * x[k] * cos(ph);
+      im += w * x[k] * sin(ph);
+    }
+    if (re * re + im * im > best) {
+      best = re * re + im * im;
+      f_best = fr;
+    }
+  }
+  return f_best;
+}
+
+static void test_faults__wg_bearing_spall_puts_a_current_line_at_its_defect_frequency(
+    void **state) {
+  (void)state;
+  // wrist 3 at 2 rad/s, an outer-race spall of a 13-ball bearing with d cos φ / D = 0.2: the
+  // outer race sits in the fixed flexspline, so the race speed is f_WG and the balls pass the
+  // spall at BPFO = n/2 (1 − d cos φ / D) f_WG (the textbook formula, not the fault code's)
+  const int j = 5;
+  urt_model_t *m = urt_test_model(urt_test_quiet);
+  urt_fault_spec_t f = spec(URT_FAULT_WG_BEARING, j, 0.05 * m->motor[j].kt * m->control[j].i_max);
+  f.location = URT_FAULT_BEARING_OUTER;
+  f.balls = 13;
+  f.ball_ratio = 0.2;
+  urt_data_t *h = new_data(m), *d = new_data(m);
+  install(m, d, &f, 1);
+  h->cmd.qd[j] = d->cmd.qd[j] = 2.0;
+  run(m, h, 0.3);
+  run(m, d, 0.3);
+  enum { kN = 500, kDec = 10 };  // 0.25 s at 2 kHz
+  static double diff[kN];
+  for (int k = 0; k < kN; k++) {
+    for (int s = 0; s < kDec; s++) {
+      assert_int_equal(urt_step(m, h), URT_OK);
+      assert_int_equal(urt_step(m, d), URT_OK);
+    }
+    diff[k] = d->x[j][URT_X_I] - h->x[j][URT_X_I];
+  }
+  const double f_wg = fabs(d->x[j][URT_X_QDWG]) / (2.0 * M_PI);
+  const double bpfo = 13.0 / 2.0 * (1.0 - 0.2) * f_wg;
+  const double got = strongest_line(diff, kN, 1.0 / (kDec * m->dt), 0.6 * bpfo, 1.4 * bpfo, 0.5);
+  print_message("f_WG %.2f Hz, BPFO %.2f Hz\n", f_wg, bpfo);
+  expect_rel("strongest current line near BPFO", got, bpfo, 0.02);
+  assert_int_equal(d->pstop, 0);
+  free(h);
+  free(d);
+  urt_model_free(m);
+}
+
 /* ---- encoders ---- */
 
 /* TCP position Jacobian column j by central differences of the forward kinematics */
@@ -392,6 +547,51 @@ static void test_faults__stuck_motor_encoder_holds_its_reading(void **state) {
   assert_true(moved > 0.01);
   free(d);
   urt_model_free(m);
+}
+
+static void test_faults__missed_joint_counts_put_the_arm_ahead_by_the_lost_fraction(
+    void **state) {
+  (void)state;
+  // the base joint at 0.5 rad/s; for 1 s its encoder loses 5 % of the counts it passes, so its
+  // reading runs at (1 − 0.05) of the true speed: the loop, closing on it, turns the arm at
+  // 0.5/(1 − 0.05) rad/s while the counts are lost, ahead of the healthy run by 0.05 of that
+  const double p_lost = 0.05, v = 0.5;
+  urt_fault_spec_t f = spec(URT_FAULT_ENCODER_MISSED, 0, p_lost);
+  f.component = URT_FAULT_ENC_JOINT;
+  f.profile = URT_FAULT_INTERMITTENT;
+  f.on = 1.0;
+  f.off = 100.0;
+  f.seed = 5;
+  pair_t p = pair_run(&f, 1, 0, v, 1.5);
+  expect_rel("arm ahead of the healthy run", p.f->x[0][URT_X_Q] - p.h->x[0][URT_X_Q],
+             p_lost * v / (1.0 - p_lost) * 1.0, 0.10);
+  pair_free(&p);
+}
+
+static void test_faults__missed_motor_counts_lower_the_speed_reading_by_the_lost_fraction(
+    void **state) {
+  (void)state;
+  // the base joint at 0.5 rad/s with 10 % of the motor encoder's counts lost: the speed reading
+  // is (1 − 0.1) of the true speed on average, so the speed loop runs the motor faster until
+  // the position loop's error pays for it, p_pos Δe = 0.1 ω_M: the joint runs ahead by
+  // 0.1 ω_M / p_pos (the position loop's law, model.md's PI cascade)
+  const double p_lost = 0.1;
+  urt_fault_spec_t f = spec(URT_FAULT_ENCODER_MISSED, 0, p_lost);
+  f.component = URT_FAULT_ENC_MOTOR;
+  f.seed = 9;
+  pair_t p = pair_run(&f, 1, 0, 0.5, 0.8);
+  double ahead = 0.0, w_m = 0.0;
+  const int n = 4000;  // the last 0.2 s, averaged over the lost counts' dips
+  for (int k = 0; k < n; k++) {
+    assert_int_equal(urt_step(p.m, p.h), URT_OK);
+    assert_int_equal(urt_step(p.m, p.f), URT_OK);
+    ahead += p.f->x[0][URT_X_Q] - p.h->x[0][URT_X_Q];
+    w_m += p.f->x[0][URT_X_QDM];
+  }
+  ahead /= n;
+  w_m /= n;
+  expect_rel("joint ahead of the healthy run", ahead, p_lost * w_m / p.m->control[0].p_pos, 0.10);
+  pair_free(&p);
 }
 
 /* ---- collision ---- */
@@ -551,6 +751,19 @@ static void test_faults__step_makes_no_heap_allocations_with_faults(void **state
   f[3].joint = 0;
   f[3].direction[0] = 1.0;
   install(m, d, f, 5);
+  // and the gear and count faults, the backlash gap's tables included
+  urt_fault_spec_t g[4] = {spec(URT_FAULT_BACKLASH, 0, 1e-3), spec(URT_FAULT_WG_BEARING, 1, 0.05),
+                           spec(URT_FAULT_TRANSMISSION_ERROR, 2, 5e-4),
+                           spec(URT_FAULT_ENCODER_MISSED, 3, 0.1)};
+  g[1].balls = 13;
+  g[1].ball_ratio = 0.2;
+  g[3].component = URT_FAULT_ENC_MOTOR;
+  urt_fault_spec_t all[9];
+  memcpy(all, f, sizeof f);
+  memcpy(all + 5, g, sizeof g);
+  install(m, d, all, 9);
+  d->cmd.qd[0] = 0.3;
+  d->cmd.qd[3] = 0.5;
   long before = urt_test_malloc_count();
   urt_test_malloc_arm(1);
   for (int k = 0; k < 2000; k++) {
@@ -587,7 +800,27 @@ static const char kGood[] =
     "    severity: 0.5\n"
     "    unit: kg\n"
     "    offset: [0, 0.02, 0.06]\n"
-    "    profile: {kind: step, onset: 3}\n";
+    "    profile: {kind: step, onset: 3}\n"
+    "  - class: wg_bearing\n"
+    "    joint: 5\n"
+    "    severity: 0.01\n"
+    "    unit: N m\n"
+    "    location: inner\n"
+    "    balls: 13\n"
+    "    ball_ratio: 0.2\n"
+    "    profile: {kind: step, onset: 0}\n"
+    "  - class: backlash\n"
+    "    joint: 2\n"
+    "    severity: 0.001\n"
+    "    unit: rad\n"
+    "    profile: {kind: step, onset: 0}\n"
+    "  - class: encoder_missed\n"
+    "    joint: 0\n"
+    "    component: joint\n"
+    "    severity: 0.01\n"
+    "    unit: \"1\"\n"
+    "    seed: 4\n"
+    "    profile: {kind: step, onset: 0}\n";
 
 static void test_faults__parse_reads_a_scenario(void **state) {
   (void)state;
@@ -595,7 +828,13 @@ static void test_faults__parse_reads_a_scenario(void **state) {
   urt_fault_scenario_t s;
   char err[512] = "";
   assert_int_equal(urt_faults_parse(m, kGood, "good.yaml", &s, err, sizeof err), URT_OK);
-  assert_int_equal(s.n, 4);
+  assert_int_equal(s.n, 7);
+  assert_int_equal(s.f[4].cls, URT_FAULT_WG_BEARING);
+  assert_int_equal(s.f[4].location, URT_FAULT_BEARING_INNER);
+  assert_true(s.f[4].balls == 13 && s.f[4].ball_ratio == 0.2);
+  assert_int_equal(s.f[5].cls, URT_FAULT_BACKLASH);
+  assert_int_equal(s.f[6].cls, URT_FAULT_ENCODER_MISSED);
+  assert_true(s.f[6].seed == 4 && s.f[6].component == URT_FAULT_ENC_JOINT);
   assert_int_equal(s.f[3].cls, URT_FAULT_PAYLOAD);
   assert_true(s.f[3].offset[1] == 0.02 && s.f[3].offset[2] == 0.06);
   assert_int_equal(s.f[0].cls, URT_FAULT_DEMAGNETISATION);
@@ -646,6 +885,20 @@ static void test_faults__parse_errors_name_file_line_key_and_reason(void **state
   expect_error(m, "kind: linear", "kind: sawtooth", "faults[0].profile.kind: must be step");
   expect_error(m, "offset: [0, 0.02, 0.06]", "offset: [0, 0.02, 1.5]",
                "bad.yaml:21: faults[3].offset[2]: must be in [-1, 1] (got 1.5)");
+  // the new classes' ranges and keys: backlash up to 10 arcmin, the bearing pulse up to 10 %
+  // of the wrist's k_t i_max (0.1 k_t i_max = 0.0277 N m, i_max as the loader derives it), the bearing's geometry
+  expect_error(m, "severity: 0.001", "severity: 0.003",
+               "faults[5].severity: must be in [0, 0.00290888] (got 0.003)");
+  expect_error(m, "severity: 0.01\n    unit: N m", "severity: 0.03\n    unit: N m",
+               "faults[4].severity: must be in [0, 0.0277228] (got 0.03)");
+  expect_error(m, "location: inner", "location: cage",
+               "faults[4].location: must be outer, inner or ball (got 'cage')");
+  expect_error(m, "    balls: 13\n", "", "faults[4].balls: missing key");
+  expect_error(m, "ball_ratio: 0.2", "ball_ratio: 0.7", "faults[4].ball_ratio: must be in");
+  expect_error(m, "    unit: rad\n", "    unit: rad\n    balls: 9\n",
+               "faults[5].balls: only a wg_bearing fault has");
+  expect_error(m, "severity: 0.01\n    unit: \"1\"", "severity: 0.6\n    unit: \"1\"",
+               "faults[6].severity: must be in [0, 0.5] (got 0.6)");
   urt_fault_scenario_t s;
   char err[256];
   assert_int_equal(urt_faults_load(m, "/nonexistent/faults.yaml", &s, err, sizeof err), URT_EIO);
@@ -664,6 +917,11 @@ int main(void) {
       cmocka_unit_test(test_faults__brake_drag_adds_its_coulomb_torque),
       cmocka_unit_test(test_faults__gear_stiffness_loss_is_the_model_with_k_m_edited),
       cmocka_unit_test(test_faults__crack_puts_a_current_line_at_twice_the_wave_generator_frequency),
+      cmocka_unit_test(test_faults__backlash_is_lost_motion_of_its_width_at_a_reversal),
+      cmocka_unit_test(test_faults__transmission_error_is_the_2_f_wg_harmonic_of_its_amplitude),
+      cmocka_unit_test(test_faults__wg_bearing_spall_puts_a_current_line_at_its_defect_frequency),
+      cmocka_unit_test(test_faults__missed_joint_counts_put_the_arm_ahead_by_the_lost_fraction),
+      cmocka_unit_test(test_faults__missed_motor_counts_lower_the_speed_reading_by_the_lost_fraction),
       cmocka_unit_test(test_faults__joint_encoder_bias_moves_the_tcp_by_the_jacobian_times_it),
       cmocka_unit_test(test_faults__joint_encoder_drift_walks_the_arm_at_its_rate),
       cmocka_unit_test(test_faults__joint_encoder_noise_has_its_sigma),

@@ -303,3 +303,99 @@ def test_lcm_io_sets_inputs_and_bad_ones_are_counted_not_applied():
     assert 1 <= ticks <= 250
     assert v == {"actual_digital_input_bits": (1 << 5) | (1 << 16), "standard_analog_input1": 2.5}
     assert stats and [int(x) for x in stats.groups()] == [6, 1, 5, 0]
+
+
+def fault_message(fault_class, joint=0, severity=0.0, profile="step", onset=0.0, inject=1,
+                  component=0, ramp=0.0, **kw):
+    lcmt_urtwin_fault = lcm_type("lcmt_urtwin_fault")
+    m = lcmt_urtwin_fault()
+    m.utime = int(time.monotonic() * 1e6)
+    m.inject, m.fault_class, m.joint, m.component = inject, fault_class, joint, component
+    m.severity, m.profile, m.onset, m.ramp = severity, profile, onset, ramp
+    for k, v in kw.items():
+        setattr(m, k, v)
+    return m.encode()
+
+
+def test_lcm_fault_truth_matches_the_scenario_and_live_faults_come_and_go(tmp_path):
+    # a scenario fault ramping in (demagnetisation of the shoulder, 0.2 over 0.5 s from 0.3 s),
+    # then a live backlash on the elbow injected on URTWIN_FAULT and cleared again, and bad
+    # messages that are counted and refused while the emulator runs on
+    onset, ramp, sev = 0.3, 0.5, 0.2
+    scenario = tmp_path / "faults.yaml"
+    scenario.write_text("faults:\n  - class: demagnetisation\n    joint: 1\n    severity: 0.2\n"
+                        "    unit: \"1\"\n    profile: {kind: linear, onset: 0.3, ramp: 0.5}\n")
+    lcmt_urtwin_fault_truth = lcm_type("lcmt_urtwin_fault_truth")
+    url, prefix = lcm_endpoint()
+    period = 0.002
+    with Emulator("--lcm", "--lcm-url", url, "--lcm-prefix", prefix, "--faults",
+                  str(scenario)) as emu:
+        ls = Listener(url, prefix)
+        truth, lock = [], threading.Lock()
+        tl = lcm.LCM(url)
+
+        def on_truth(_ch, data):
+            with lock:
+                truth.append(lcmt_urtwin_fault_truth.decode(data))
+
+        tl.subscribe(prefix + "_FAULT_TRUTH", on_truth).set_queue_capacity(5000)
+        stop = threading.Event()
+
+        def spin():
+            while not stop.is_set():
+                tl.handle_timeout(20)
+
+        th = threading.Thread(target=spin, daemon=True)
+        th.start()
+        assert ls.wait_tick(int(0.9 / period), timeout=10) is not None
+        pub = lcm.LCM(url)
+        # bad: an unknown class, a severity beyond the class's range, an unknown profile,
+        # a bearing without its geometry, garbage
+        pub.publish(prefix + "_FAULT", fault_message("flux_capacitor", 1, 0.1))
+        pub.publish(prefix + "_FAULT", fault_message("demagnetisation", 1, 0.5))
+        pub.publish(prefix + "_FAULT", fault_message("backlash", 2, 1e-3, profile="sawtooth"))
+        pub.publish(prefix + "_FAULT", fault_message("wg_bearing", 4, 0.01))
+        pub.publish(prefix + "_FAULT", b"\x01" * 40)
+        tick_sent = ls.last().tick
+        pub.publish(prefix + "_FAULT", fault_message("backlash", 2, 1e-3))
+        ls.wait_tick(tick_sent + 150, timeout=10)
+        tick_clear = ls.last().tick
+        pub.publish(prefix + "_FAULT", fault_message("backlash", 2, inject=0, component=-1))
+        ls.wait_tick(tick_clear + 150, timeout=10)
+        stop.set()
+        th.join()
+        ls.close()
+    log = emu.err.decode(errors="replace")
+    stats = re.search(r"faults received (\d+) accepted (\d+) rejected (\d+) dropped (\d+), "
+                      r"fault truth (\d+)", log)
+    print(f"\nLCM faults: {len(truth)} truth messages; {stats.group(0) if stats else log[-500:]}")
+    assert stats and [int(x) for x in stats.groups()[:4]] == [7, 2, 5, 0]
+    assert truth and all(t.num_faults >= 1 for t in truth)
+
+    # the scenario's fault: onset within one period, severity on its profile within 1e-9
+    first_on = next(t for t in truth if t.active[0])
+    print(f"scenario onset {first_on.onset[0]:.6f} s, first active tick at {first_on.utime} us")
+    assert truth[0].fault_class[0] == "demagnetisation" and truth[0].joint[0] == 1
+    assert abs(first_on.onset[0] - onset) <= period
+    assert onset <= first_on.utime * 1e-6 <= onset + period
+    worst = 0.0
+    for t in truth:
+        want = sev * min(1.0, (t.sim_time - onset) / ramp) if t.sim_time >= onset else 0.0
+        worst = max(worst, abs(t.severity[0] - want))
+    print(f"scenario severity: worst |s - s(t)| {worst:.2e} over {len(truth)} ticks")
+    assert worst <= 1e-9
+
+    # the live fault: there from the tick after it was sent, with its severity, gone when
+    # cleared; the scenario fault keeps its onset through both
+    live = [t for t in truth if t.num_faults == 2]
+    assert live and all(t.fault_class[1] == "backlash" and t.joint[1] == 2 for t in live)
+    first = live[0]
+    print(f"live backlash seen from tick {first.tick} (sent at status tick {tick_sent}), onset "
+          f"{first.onset[1]:.6f} s at tick time {first.utime * 1e-6:.6f} s")
+    assert first.tick >= tick_sent
+    assert abs(first.onset[1] - first.utime * 1e-6) <= period
+    assert all(abs(t.severity[1] - 1e-3) <= 1e-9 for t in live if t.active[1])
+    after = [t for t in truth if t.tick > live[-1].tick]
+    assert after and all(t.num_faults == 1 for t in after)
+    assert all(t.onset[0] == first_on.onset[0] for t in truth if t.tick >= first_on.tick)
+    assert truth[-1].faults_applied == 2 and truth[-1].faults_refused == 0

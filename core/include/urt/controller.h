@@ -157,9 +157,15 @@ typedef enum urt_ctrl_cmd_kind {
   URT_CTRL_MOVEC,             /* pose[6] = pose_to, q[6] = pose_via (position used), a, v, r,
                                  index = mode (0: orientation interpolated to pose_to, 1: fixed
                                  relative to the arc's tangent)                             */
-  URT_CTRL_OPTIMOVEL          /* pose[6], a, v: fractions in (0, 1] of the tool acceleration and
+  URT_CTRL_OPTIMOVEL,         /* pose[6], a, v: fractions in (0, 1] of the tool acceleration and
                                  speed the joints allow along the line (qdd_max, qd_max with the
                                  planner's margins 0.9, 0.98), r as movel                    */
+  /* added by the fault issue: live injection (URTWIN_FAULT on LCM) */
+  URT_CTRL_FAULT              /* inject (index 1) or clear (index 0) a fault in the physics;
+                                 fields as urt_fault_cmd_pack (urt/faults.h) writes them. An
+                                 onset before the tick's time starts the profile at the tick.
+                                 Invalid or with URT_MAX_FAULTS installed: refused
+                                 (URT_CTRL_FAULT_BAD_ARGUMENT), counted in faults_refused    */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
@@ -248,6 +254,9 @@ typedef struct urt_ctrl {
   double analog_in[2];        /* standard analog inputs [V]                       */
   double tool_analog_in[2];   /* tool analog inputs [V]                           */
   double ft_bias[6];          /* subtracted from the TCP wrench (ZERO_FTSENSOR) [N, N m] */
+
+  /* added by the fault issue: live fault commands (URT_CTRL_FAULT) applied and refused */
+  uint32_t faults_applied, faults_refused;
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or

@@ -42,11 +42,27 @@ enum {
                                  * each time one of the WG's two lobes passes it            [1]  */
   URT_FAULT_PAYLOAD,            /* an unexpected point mass s at `offset` (flange frame): the
                                  * physics carries it, the controller does not know it [kg] */
+  URT_FAULT_BACKLASH,           /* a dead zone of width s in the gear's output torsional spring
+                                 * (T_CS = 0 while |q_CS − q| < s/2): lost motion s at every
+                                 * torque reversal, output side                       [rad] */
+  URT_FAULT_WG_BEARING,         /* a spall in the WG bearing: a torque pulse of peak s on the WG
+                                 * each time a ball passes it, at BPFO, BPFI or BSF of the
+                                 * relative race speed (`location`, `balls`, `ball_ratio`) [N m] */
+  URT_FAULT_TRANSMISSION_ERROR, /* kinematic error growth: the output lags the CS by
+                                 * s·sin(2 q_WG), the 2·f_WG harmonic                 [rad] */
+  URT_FAULT_ENCODER_MISSED,     /* each count the encoder should register is lost with
+                                 * probability s (seeded): the joint encoder's reading falls
+                                 * behind by the lost counts, the motor encoder's speed reading
+                                 * dips one count per step for each                    [1]  */
   URT_FAULT_NCLASSES
 };
 
 /* Which sensor an encoder fault hits (ignored by the other classes). */
 enum { URT_FAULT_ENC_JOINT = 0, URT_FAULT_ENC_MOTOR = 1 };
+
+/* Where a WG-bearing spall sits: on the outer race (in the fixed flexspline; impacts at BPFO),
+ * the inner race (on the WG cam; BPFI) or a ball (BSF). */
+enum { URT_FAULT_BEARING_OUTER = 0, URT_FAULT_BEARING_INNER = 1, URT_FAULT_BEARING_BALL = 2 };
 
 /* How a fault's severity evolves from its onset (s(t) for a spec of severity v):
  *   STEP          v from onset on
@@ -77,6 +93,9 @@ typedef struct urt_fault_spec {
   uint64_t seed;        /* RANDOM_WALK and ENCODER_NOISE draws               */
   double direction[3];  /* COLLISION: unit vector of the force, base frame    */
   double offset[3];     /* PAYLOAD: where the mass sits, flange frame   [m]   */
+  int32_t location;     /* WG_BEARING: URT_FAULT_BEARING_*                    */
+  int32_t balls;        /* WG_BEARING: number of rolling elements             */
+  double ball_ratio;    /* WG_BEARING: d cos φ / D (ball over pitch diameter) */
 } urt_fault_spec_t;
 
 typedef struct urt_fault_scenario {
@@ -98,6 +117,11 @@ typedef struct urt_fault_joint {
   int32_t q_stuck, qdm_stuck;  /* 1: the measurement holds q_hold / qdm_hold           */
   double q_hold, qdm_hold;
   double crack;                /* crack depth: K_m dips by this fraction under a lobe  */
+  double backlash;             /* dead-zone width of the output spring            [rad] */
+  double te_amp;               /* kinematic error s·sin(2 q_WG) at the output     [rad] */
+  double wg_pulse;             /* WG-bearing pulse peak                           [N m] */
+  double wg_pulse_rate;        /* impacts per WG radian (relative to the FS)      [1/rad] */
+  double qdm_missed;           /* this step's lost motor counts as a speed error [rad/s] */
   double z_max;                /* LuGre's bound on |z| with these friction levels [rad] */
 } urt_fault_joint_t;
 
@@ -108,6 +132,8 @@ typedef struct urt_fault_state {
   double acc[URT_MAX_FAULTS];          /* DRIFT: the bias accumulated; RANDOM_WALK: the walk */
   int32_t active[URT_MAX_FAULTS];      /* the profile is on at the current step       */
   int32_t stuck_latched[URT_MAX_FAULTS];
+  double last_count[URT_MAX_FAULTS];   /* ENCODER_MISSED: the count the sensor last passed */
+  double missed[URT_MAX_FAULTS];       /* ENCODER_MISSED: joint counts lost so far [rad] */
   urt_rng_t rng[URT_MAX_FAULTS];
   uint32_t joint_mask;                 /* bit j: joint[j] below is in use             */
   uint32_t reserved;

@@ -11,6 +11,7 @@
 
 #include "urt/controller.h"
 #include "urt/data.h"
+#include "urt/faults.h"
 #include "urt/model.h"
 
 #ifdef __cplusplus
@@ -86,6 +87,10 @@ typedef struct urt_snapshot {
   int32_t tool_voltage;       /* tool connector supply (set_tool_voltage)   [V]       */
   int64_t published_wall_ns;  /* CLOCK_REALTIME when the loop published this tick [ns]
                                * (DDS source timestamps: tick → subscriber latency)   */
+
+  /* fault ground truth at the tick (urt_faults_truth; LCM URTWIN_FAULT_TRUTH) */
+  urt_fault_truth_t fault_truth;
+  uint32_t faults_applied, faults_refused;  /* live fault commands (URT_CTRL_FAULT)   */
 } urt_snapshot_t;
 
 /* Fill a snapshot from the physics and the controller (calls urt_data_update_outputs).

@@ -123,7 +123,7 @@ static void fake_set(fake_t *f, uint64_t newest, uint64_t newest_drive) {
 
 static urt_lcm_source_t fake_source(fake_t *f) {
   urt_lcm_source_t s = {f,           fake_wait,  fake_read, fake_latest_drive, fake_read_drive,
-                        fake_submit, fake_grant, NULL};
+                        fake_submit, fake_grant, NULL,      NULL};
   return s;
 }
 

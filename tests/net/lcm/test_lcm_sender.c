@@ -5,6 +5,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "test_model.h"
 #include "test_support.h"
 #include "urt/errors.h"
 #include "urt/net/lcm_sender.h"
@@ -351,6 +352,132 @@ static void test_lcm_command_decode__refuses_nan_in_bytes(void **state) {
   assert_int_equal(urt_lcm_command_decode(buf, n, 1, &out), URT_ERANGE);
 }
 
+/* ---- faults ---- */
+
+static int encode_fault(const urtwin_lcmt_urtwin_fault *f, uint8_t *buf, int cap) {
+  int n = urtwin_lcmt_urtwin_fault_encode(buf, 0, cap, f);
+  assert_true(n > 0);
+  return n;
+}
+
+static urtwin_lcmt_urtwin_fault fault_msg(char *cls, char *profile, int joint, double sev) {
+  static char empty[] = "";
+  urtwin_lcmt_urtwin_fault f;
+  memset(&f, 0, sizeof f);
+  f.inject = 1;
+  f.fault_class = cls;
+  f.profile = profile;
+  f.location = empty;
+  f.joint = joint;
+  f.severity = sev;
+  return f;
+}
+
+static void test_lcm_fault_decode__gives_the_spec_as_a_fault_command(void **state) {
+  (void)state;
+  urt_model_t *m = urt_test_model(NULL);
+  char cls[] = "wg_bearing", prof[] = "linear", loc[] = "ball";
+  urtwin_lcmt_urtwin_fault f = fault_msg(cls, prof, 4, 0.01);
+  f.location = loc;
+  f.balls = 11;
+  f.ball_ratio = 0.25;
+  f.onset = 1.5;
+  f.ramp = 2.0;
+  f.seed = 77;
+  uint8_t buf[512];
+  int n = encode_fault(&f, buf, sizeof buf);
+  urt_ctrl_cmd_t c;
+  assert_int_equal(urt_lcm_fault_decode(buf, (size_t)n, m, &c), 0);
+  assert_int_equal(c.kind, URT_CTRL_FAULT);
+  urt_fault_spec_t s;
+  assert_int_equal(urt_fault_cmd_unpack(&c, &s), 1);
+  assert_int_equal(s.cls, URT_FAULT_WG_BEARING);
+  assert_int_equal(s.joint, 4);
+  assert_int_equal(s.profile, URT_FAULT_LINEAR);
+  assert_int_equal(s.location, URT_FAULT_BEARING_BALL);
+  assert_int_equal(s.balls, 11);
+  assert_true(s.severity == 0.01 && s.onset == 1.5 && s.ramp == 2.0 && s.ball_ratio == 0.25);
+  assert_true(s.seed == 77);
+  urt_model_free(m);
+}
+
+static void test_lcm_fault_decode__refuses_unknown_names_ranges_and_garbage(void **state) {
+  (void)state;
+  urt_model_t *m = urt_test_model(NULL);
+  char demag[] = "demagnetisation", nope[] = "flux_capacitor", step[] = "step", saw[] = "saw";
+  uint8_t buf[512];
+  urt_ctrl_cmd_t c, before;
+  memset(&c, 0x5a, sizeof c);
+  before = c;
+  struct {
+    urtwin_lcmt_urtwin_fault f;
+    const char *why;
+  } bad[] = {
+      {fault_msg(nope, step, 1, 0.1), "unknown class"},
+      {fault_msg(demag, saw, 1, 0.1), "unknown profile"},
+      {fault_msg(demag, step, 1, 0.5), "severity beyond 0.3"},
+      {fault_msg(demag, step, 6, 0.1), "joint 6"},
+      {fault_msg(demag, step, 1, NAN), "NaN severity"},
+  };
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+    int n = encode_fault(&bad[k].f, buf, sizeof buf);
+    print_message("%s\n", bad[k].why);
+    assert_int_equal(urt_lcm_fault_decode(buf, (size_t)n, m, &c), URT_ERANGE);
+    assert_memory_equal(&c, &before, sizeof c);
+  }
+  // truncated, trailing bytes, garbage
+  urtwin_lcmt_urtwin_fault ok = fault_msg(demag, step, 1, 0.1);
+  int n = encode_fault(&ok, buf, sizeof buf);
+  assert_int_equal(urt_lcm_fault_decode(buf, (size_t)n - 3, m, &c), URT_EPROTO);
+  assert_int_equal(urt_lcm_fault_decode(buf, (size_t)n + 1, m, &c), URT_EPROTO);
+  memset(buf, 0x01, 64);
+  assert_int_equal(urt_lcm_fault_decode(buf, 64, m, &c), URT_EPROTO);
+  assert_memory_equal(&c, &before, sizeof c);
+  urt_model_free(m);
+}
+
+static void test_lcm_fault_truth_fill__maps_every_fault(void **state) {
+  (void)state;
+  urt_snapshot_t s;
+  memset(&s, 0, sizeof s);
+  s.tick = 250;
+  s.time = 0.5;
+  s.sim_time = 0.5;
+  s.faults_applied = 3;
+  s.faults_refused = 1;
+  s.fault_truth.n = 2;
+  s.fault_truth.cls[0] = URT_FAULT_BACKLASH;
+  s.fault_truth.joint[0] = 2;
+  s.fault_truth.active[0] = 1;
+  s.fault_truth.severity[0] = 1e-3;
+  s.fault_truth.onset[0] = 0.25;
+  s.fault_truth.cls[1] = URT_FAULT_COLLISION;
+  s.fault_truth.severity[1] = 0.0;
+  s.fault_truth.onset[1] = -1.0;
+  static urt_lcm_fault_truth_buf_t b;
+  urt_lcm_fault_truth_fill(&s, &b);
+  assert_int_equal(b.msg.utime, 500000);
+  assert_int_equal(b.msg.tick, 250);
+  assert_int_equal(b.msg.num_faults, 2);
+  assert_string_equal(b.msg.fault_class[0], "backlash");
+  assert_string_equal(b.msg.fault_class[1], "collision");
+  assert_int_equal(b.msg.joint[0], 2);
+  assert_int_equal(b.msg.joint[1], -1);  // at the TCP
+  assert_true(b.msg.active[0] == 1 && b.msg.active[1] == 0);
+  assert_true(b.msg.severity[0] == 1e-3 && b.msg.onset[0] == 0.25 && b.msg.onset[1] == -1.0);
+  assert_int_equal(b.msg.faults_applied, 3);
+  assert_int_equal(b.msg.faults_refused, 1);
+  // it encodes and decodes to itself
+  uint8_t buf[2048];
+  int n = urtwin_lcmt_urtwin_fault_truth_encode(buf, 0, sizeof buf, &b.msg);
+  assert_true(n > 0);
+  urtwin_lcmt_urtwin_fault_truth back;
+  assert_int_equal(urtwin_lcmt_urtwin_fault_truth_decode(buf, 0, n, &back), n);
+  assert_string_equal(back.fault_class[0], "backlash");
+  assert_true(back.severity[0] == 1e-3);
+  urtwin_lcmt_urtwin_fault_truth_decode_cleanup(&back);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_lcm_status_fill__maps_every_field),
@@ -365,6 +492,9 @@ int main(void) {
       cmocka_unit_test(test_lcm_command_decode__refuses_wrong_fingerprint),
       cmocka_unit_test(test_lcm_command_decode__refuses_huge_counts_without_allocating),
       cmocka_unit_test(test_lcm_command_decode__refuses_nan_in_bytes),
+      cmocka_unit_test(test_lcm_fault_decode__gives_the_spec_as_a_fault_command),
+      cmocka_unit_test(test_lcm_fault_decode__refuses_unknown_names_ranges_and_garbage),
+      cmocka_unit_test(test_lcm_fault_truth_fill__maps_every_fault),
   };
   return cmocka_run_group_tests_name("net/lcm/sender", tests, NULL, NULL);
 }

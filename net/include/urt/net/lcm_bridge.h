@@ -35,6 +35,8 @@ extern "C" {
 #define URT_LCM_DEFAULT_DRIVE "URTWIN_DRIVE"
 #define URT_LCM_DEFAULT_COMMAND "URTWIN_COMMAND"
 #define URT_LCM_DEFAULT_IO "URTWIN_IO"
+#define URT_LCM_DEFAULT_FAULT "URTWIN_FAULT"
+#define URT_LCM_DEFAULT_FAULT_TRUTH "URTWIN_FAULT_TRUTH"
 
 typedef struct urt_lcm_config {
   const char *url;             /* LCM provider URL; NULL: URT_LCM_DEFAULT_URL                   */
@@ -45,6 +47,11 @@ typedef struct urt_lcm_config {
   const char *io_channel;      /* NULL: URT_LCM_DEFAULT_IO; "": do not listen for input levels
                                 * (lcmt_urtwin_io → URT_CTRL_SET_INPUTS, on the subscriber
                                 * thread; never grants a tick)                                   */
+  const char *fault_channel;   /* NULL: URT_LCM_DEFAULT_FAULT; "": no live fault injection
+                                * (lcmt_urtwin_fault → URT_CTRL_FAULT, on the subscriber thread,
+                                * checked against the source's model; never grants a tick)     */
+  const char *fault_truth_channel; /* NULL: URT_LCM_DEFAULT_FAULT_TRUTH; "": none. One
+                                * lcmt_urtwin_fault_truth per tick, after its status           */
   double drive_rate;           /* drive messages per second at most [Hz], by sample time;
                                 * 0: every sample the loop makes (its own drive_rate)           */
   int lockstep;                /* 1 (loop in URT_PACING_LOCKSTEP): grant one tick at start, so a
@@ -71,6 +78,8 @@ typedef struct urt_lcm_stats {
   uint64_t cmd_dropped;     /* valid but the command ring was full                           */
   uint64_t last_tick;       /* tick of the last status published                             */
   uint64_t io_received, io_accepted, io_rejected, io_dropped;  /* the same, I/O channel   */
+  uint64_t fault_received, fault_accepted, fault_rejected, fault_dropped;  /* fault channel */
+  uint64_t truth_sent;      /* fault-truth messages published                                */
 } urt_lcm_stats_t;
 
 /* Where the bridge reads ticks and drive samples and sends commands: the loop (urt_lcm_bridge_
@@ -85,6 +94,8 @@ typedef struct urt_lcm_source {
   bool (*submit)(void *ctx, const urt_ctrl_cmd_t *cmd);   /* from the subscriber thread only */
   void (*grant)(void *ctx, uint64_t n);
   void (*release)(void *ctx);                             /* at destroy                      */
+  const urt_model_t *model;  /* what fault injections are checked against (the loop's model);
+                              * NULL: only their names are checked, the controller the rest */
 } urt_lcm_source_t;
 
 typedef struct urt_lcm_bridge urt_lcm_bridge_t;

@@ -17,10 +17,13 @@
 #include <stdint.h>
 
 #include "urt/controller.h"
+#include "urt/faults.h"
 #include "urt/loop.h"
 #include "urt/snapshot.h"
 #include "urtwin_lcmt_urtwin_command.h"
 #include "urtwin_lcmt_urtwin_drive.h"
+#include "urtwin_lcmt_urtwin_fault.h"
+#include "urtwin_lcmt_urtwin_fault_truth.h"
 #include "urtwin_lcmt_urtwin_io.h"
 #include "urtwin_lcmt_urtwin_status.h"
 
@@ -60,6 +63,30 @@ int urt_lcm_command_decode(const void *buf, size_t len, uint64_t id, urt_ctrl_cm
  * named by the mask not finite or outside [0, 10] V). On failure *out is untouched.
  * Context: any; no allocation (the type has no variable-length arrays). */
 int urt_lcm_io_decode(const void *buf, size_t len, urt_ctrl_cmd_t *out);
+
+/* Decode an encoded lcmt_urtwin_fault (as received on the fault channel) into a URT_CTRL_FAULT
+ * command (urt_fault_cmd_pack). An injection is checked as a scenario file's entry would be
+ * (urt_fault_spec_invalid against m; with m NULL only what needs no model: class, profile and
+ * location names); a collision's direction is normalised. Returns 0, URT_EPROTO (not a
+ * well-formed lcmt_urtwin_fault) or URT_ERANGE (unknown class, profile or location, a target,
+ * severity or profile the class refuses, a seed outside [0, 2^53)). On failure *out is
+ * untouched. Context: non-RT (the generated decoder allocates the strings). Nullable: m. */
+int urt_lcm_fault_decode(const void *buf, size_t len, const urt_model_t *m, urt_ctrl_cmd_t *out);
+
+/* A fault-truth message with its arrays: urt_lcm_fault_truth_fill points msg's arrays into this
+ * struct (class names at the static urt_fault_class_name strings), so filling allocates
+ * nothing. Not copyable by assignment (msg points into it). */
+typedef struct urt_lcm_fault_truth_buf {
+  urtwin_lcmt_urtwin_fault_truth msg;
+  char *fault_class[URT_MAX_FAULTS];
+  int32_t joint[URT_MAX_FAULTS], component[URT_MAX_FAULTS];
+  int8_t active[URT_MAX_FAULTS];
+  double severity[URT_MAX_FAULTS], onset[URT_MAX_FAULTS];
+} urt_lcm_fault_truth_buf_t;
+
+/* Fill b->msg from the snapshot of one tick (its fault_truth). utime as the status's.
+ * Context: any; no allocation. */
+void urt_lcm_fault_truth_fill(const urt_snapshot_t *s, urt_lcm_fault_truth_buf_t *b);
 
 #ifdef __cplusplus
 }
