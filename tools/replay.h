@@ -28,6 +28,7 @@ struct ReplayResult {
   double max_time_offset = 0;  // largest distance of a sample interval from whole periods [s]
   long dropped = 0;            // samples on a tick another sample already took
   double wall = 0.0;           // wall time of the simulation [s]
+  double cpu = 0.0;            // its CPU time (the simulating thread's) [s]
   long steps = 0, refined = 0; // physics steps, and those redone as fine steps (urt_step)
   std::vector<Joints> twin_q, twin_qd, twin_current;  // the twin at each recorded sample
   ReplayJointStats joint[URT_NJ];

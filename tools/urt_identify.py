@@ -13,8 +13,10 @@ k_t·r): per joint that moves (range > 0.05 rad in a file) the Coulomb level f_c
 level f_v, the Stribeck level k_static and speed qd_s, the direction asymmetry asym; for every
 joint the current-measurement offset; and the CoMs of links 2–6 (the first moments that set
 the gravity torques of shoulder, elbow and wrists; masses are kept, a CoM is a mass-weighted
-position), each within physical bounds and pulled weakly towards the paper's value so that
-what the recordings cannot see stays the paper's. A Stribeck dip steeper than the gear's output
+position), and per joint that moves the motor torque constant k_t (within ±10 % of the
+config's: the motors' tolerance and temperature; the model's ke is kt),
+each within physical bounds and pulled weakly towards the paper's value so that what the
+recordings cannot see stays the paper's. A Stribeck dip steeper than the gear's output
 damping (the paper's own dip where that is steeper) is penalised: it would self-excite. A payload (payload.mass, payload.cog) is
 fitted when the model has those keys (urt_config prints a `payload` block).
 
@@ -55,6 +57,9 @@ PAYLOAD_PRIOR = 0.5     # [kg] its scale for the payload mass
 PRIOR_WEIGHT = 0.03     # weight of that pull, relative to one normalised current RMS
 FRICTION_NAMES = ("f_c", "f_v", "k_static", "qd_s", "asym")
 FIT_LINKS = (1, 2, 3, 4, 5)  # 0-based: upper arm … link 6
+FIT_KT = True           # fit the motor torque constants (off with --no-arm)
+KT_BOUND = 0.10         # k_t within ± this fraction of the config's: the motors' tolerance
+KT_PRIOR = 0.03         # scale of the weak pull towards the config's k_t (fraction)
 
 
 class UsageError(Exception):
@@ -110,6 +115,12 @@ class Spec:
             i_max = js[j]["control"]["i_max"]
             self.rows.append((f"joints.{j}.current_offset", None, js[j]["current_offset"],
                               -0.2 * i_max, 0.2 * i_max, (j,)))
+            if moving[j] and FIT_KT:
+                # the current per output torque: k_t of the motor as built and at its
+                # temperature (NdFeB loses ~0.1 %/K) against the data sheet's
+                kt = js[j]["motor"]["kt"]
+                self.rows.append((f"joints.{j}.motor.kt", None, kt, (1.0 - KT_BOUND) * kt,
+                                  (1.0 + KT_BOUND) * kt, (j,)))
         for i in FIT_LINKS:
             com = params["arm"]["links"][i]["com"]
             for c in range(3):
@@ -128,8 +139,11 @@ class Spec:
         self.x0 = np.clip(self.x0, self.lo + 1e-6 * span, self.hi - 1e-6 * span)
         # the weak pull towards the paper's robot: link CoMs and the payload (none)
         self.prior = [k for k, r in enumerate(self.rows)
-                      if r[0].startswith("arm.") or r[0].startswith("payload.")]
+                      if r[0].startswith("arm.") or r[0].startswith("payload.")
+                      or r[0].endswith(".motor.kt")]
         self.prior_scale = np.array([PAYLOAD_PRIOR if self.rows[k][0] == "payload.mass"
+                                     else KT_PRIOR * self.rows[k][2]
+                                     if self.rows[k][0].endswith(".motor.kt")
                                      else COM_PRIOR for k in self.prior])
 
     def unpack(self, x, params):
@@ -137,6 +151,7 @@ class Spec:
         fr = {n: np.array([js[j]["friction"][n] for j in range(NJ)], dtype=float)
               for n in FRICTION_NAMES}
         off = np.array([js[j]["current_offset"] for j in range(NJ)], dtype=float)
+        kt = np.array([js[j]["motor"]["kt"] for j in range(NJ)], dtype=float)
         links = params["arm"]["links"]
         mass = [l["mass"] for l in links]
         com = [list(l["com"]) for l in links]
@@ -147,6 +162,8 @@ class Spec:
             parts = key.split(".")
             if parts[0] == "joints" and parts[2] == "friction":
                 fr[parts[3]][int(parts[1])] = v
+            elif parts[0] == "joints" and parts[2] == "motor":
+                kt[int(parts[1])] = v
             elif parts[0] == "joints":
                 off[int(parts[1])] = v
             elif parts[0] == "arm":
@@ -155,7 +172,7 @@ class Spec:
                 payload[0] = v
             else:
                 payload[1][comp] = v
-        return fr, off, mass, com, payload
+        return fr, off, mass, com, payload, kt
 
 
 #---- data ----
@@ -179,9 +196,9 @@ class FitData:
 
 
 def predict(spec, x, params, arm, drives, fd):
-    fr, off, mass, com, payload = spec.unpack(x, params)
+    fr, off, mass, com, payload, kt = spec.unpack(x, params)
     tau = fd.y @ arm.pi(mass, com, payload)
-    return sur.current(drives, tau, fd.qd, fd.qdd, fr, off)
+    return sur.current(drives, tau, fd.qd, fd.qdd, fr, off, kt)
 
 
 #---- the fit ----
@@ -408,7 +425,7 @@ def main(argv=None):
     ap.add_argument("--name", default=None, help="overlay name (default: the file's stem)")
     ap.add_argument("--max-iter", type=int, default=60, help="function evaluations at most")
     ap.add_argument("--no-arm", action="store_true",
-                    help="fit friction and offsets only (no link CoMs, no payload)")
+                    help="fit friction and offsets only (no link CoMs, no payload, no k_t)")
     ap.add_argument("--quiet", action="store_true")
     try:
         a = ap.parse_args(argv)
@@ -427,9 +444,9 @@ def main(argv=None):
         print(f"urt_identify: {e}", file=sys.stderr)
         return 2
 
-    global FIT_LINKS
+    global FIT_LINKS, FIT_KT
     if a.no_arm:
-        FIT_LINKS = ()
+        FIT_LINKS, FIT_KT = (), False
     arm, drives = sur.Arm(params), sur.Drives(params)
     try:
         if not a.leave_one_out:

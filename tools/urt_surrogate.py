@@ -104,11 +104,13 @@ def friction_torque(qd, f_c, f_v, k_static, qd_s, asym, k_q):
     return np.tanh(qd / SIGN_EPS) * g
 
 
-def current(drives, tau_rb, qd, qdd, fr, i_off):
+def current(drives, tau_rb, qd, qdd, fr, i_off, kt=None):
     """Motor current [A] (n, 6) for rigid-body torque tau_rb and friction parameters fr (a dict
-    of per-joint arrays f_c, f_v, k_static, qd_s, asym)."""
+    of per-joint arrays f_c, f_v, k_static, qd_s, asym); kt the motor torque constants
+    (default: the model's)."""
+    kt = drives.kt if kt is None else kt
     t_f = friction_torque(qd, fr["f_c"], fr["f_v"], fr["k_static"], fr["qd_s"], fr["asym"],
                           drives.k_q)
     t_out = tau_rb + t_f + drives.jcs * qdd
-    return (t_out / drives.r_static + (drives.jm + drives.jwg) * drives.ratio * qdd) / drives.kt \
+    return (t_out / drives.r_static + (drives.jm + drives.jwg) * drives.ratio * qdd) / kt \
         + i_off
