@@ -13,7 +13,8 @@
 // SPD system (M(q_n) − γ h diag(c1)) k_q̇ = M r_q̇ + γ h c0, solved by Cholesky.
 //
 // Joints whose output inertia is too small for the Stribeck slope at h (wrist 3: model.md
-// §5.3e) are sub-stepped as 1-DoF systems with their arm coupling frozen over the macro step
+// §5.3e) are sub-stepped, while they are slower than twice the speed where the dip ends, as
+// 1-DoF systems with their arm coupling frozen over the macro step
 // (inertia M_jj and bias from the macro step's start and the other joints' accelerations
 // from the previous step); the macro step then sees their mean acceleration as prescribed.
 #ifndef URT_CORE_INTEGRATOR_HPP
@@ -46,7 +47,10 @@ enum StepKind { kMacro = 0, kSub = 1, kNumStepKinds = 2 };
 struct urt_integrator_tables {
   double h[urt::core::kNumStepKinds];   // macro step and sub-step [s]
   int n_sub;                            // sub-steps per macro step
-  int substepped[URT_NJ];               // 1: joint j is sub-stepped
+  int substepped[URT_NJ];               // 1: joint j is sub-stepped (while |q̇| < v_sub)
+  double v_sub[URT_NJ];                 // a sub-stepped joint's macro step splits it off only
+                                        // below this speed: twice where its Stribeck dip ends
+                                        // (g' < 0 nowhere above) [rad/s]
   double g_slope_min[URT_NJ];           // most negative dg/dq̇ of the friction law [N m s/rad]
   double j_out[URT_NJ];                 // smallest output inertia M_jj + J_CS seen [kg m²]
   double z_max[URT_NJ];                 // LuGre bound g(q̇_max)/σ0 on |z| (0: no friction) [rad]

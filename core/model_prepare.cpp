@@ -33,6 +33,21 @@ double friction_slope_min(const urt_friction_params_t* fp) {
   return worst;
 }
 
+// Where the Stribeck dip ends: the largest speed of friction_slope_min's grid with g' < 0 on
+// either side (0 if there is none). Above it the slope is positive, a damping the L-stable
+// macro step takes in its W. Scaling f_c and f_v together (a lubricant fault) or adding to f_c
+// at a fixed f_c k_static (brake drag) leaves the sign of g', so this speed, unchanged.
+double friction_dip_end(const urt_friction_params_t* fp) {
+  double end = 0.0;
+  for (int k = 0; k <= 400; k++) {
+    double v = 1e-6 * std::pow(10.0, 7.0 * k / 400.0);  // 1e-6 … 10 rad/s
+    if (urt_friction_dg(fp, v) < 0.0 || (fp->asym != 0.0 && -urt_friction_dg(fp, -v) < 0.0)) {
+      end = 1e-6 * std::pow(10.0, 7.0 * (k + 1) / 400.0);
+    }
+  }
+  return end;
+}
+
 // Smallest arm inertia a joint sees, over a few configurations (wrist inertias barely vary).
 // Without a payload: one only adds a positive semi-definite term to M, so the bare arm's
 // bound holds for any payload a run mounts, and the sub-stepping chosen from it stays safe
@@ -101,6 +116,7 @@ int integrator_prepare(const urt_model_t* m, urt_integrator_tables* tab) noexcep
     tab->j_out[j] = output_inertia_min(m, j);
     double ratio = m->dt * std::fabs(tab->g_slope_min[j]) / tab->j_out[j];
     tab->substepped[j] = m->friction[j].enabled && tab->n_sub > 1 && ratio > m->substep_ratio;
+    tab->v_sub[j] = 2.0 * friction_dip_end(&m->friction[j]);
     const urt_friction_params_t& fp = m->friction[j];
     double g_max = std::fmax(urt_friction_g(&fp, m->joint[j].qd_max),
                              urt_friction_g(&fp, -m->joint[j].qd_max));
