@@ -19,9 +19,11 @@
 // - When not RUNNING, or in a protective stop, the set-point holds where the arm is (the brakes
 //   hold a real arm; here the drives, which stay engaged in the physics, do).
 // - Feed-forward: every set-point carries the model's torque (controller_feedforward.cpp).
-// - The speed slider scales a planned motion's time (movej, movel): its path time advances at
-//   speed_scaling per second, and speed_scaling follows the slider at most 2 /s. servoj, speedj,
-//   speedl and stops are not scaled.
+// - The speed slider scales a planned motion's time (movej, movel) and speedj's: its path (or
+//   motion) time advances at speed_scaling per second, and speed_scaling follows the slider at
+//   most 2 /s; a speedj's speeds are its commanded ones times the scaling, and its t is motion
+//   time (motion_speedj.cpp), as on a controller, whose slider slows every motion. servoj,
+//   speedl and stops are not scaled here yet.
 // - HALT decelerates like stopj(4 rad/s²); it does not change program_state (the runner does).
 // - SET_PAYLOAD mounts the payload on link 6 (urt_data_set_payload): the physics, the CVODE
 //   reference and the controller's model (feed-forward, target current, TCP force, freedrive)

@@ -2,6 +2,14 @@
 // core/motion_speedj.cpp — speedj: every joint's speed ramps to its goal, the joints arriving
 // together (the leading one at a). With t > 0 the arm decelerates at a after t; without, the
 // call returns once the speed is reached and the speed holds until replaced. Context: RT.
+//
+// The speed slider (and the pause) scales it as it scales movej: the command runs in motion
+// time, which advances at s = speed_scaling · pause_scale per second. The speed in motion time
+// (qd_s) ramps at a per motion-second toward the goal, the set-point moves at qd_s · s, and t
+// is motion time: at s = 0.25 a speedj(qd, a, 0.002) lasts 8 ms at a quarter of qd, covering
+// the same joint distance. URCL's spline execution relies on it (one speedj per step of its
+// spline time; its speed-scaling test expects each step to hold 1/s controller cycles). At
+// s = 1 the set-point is bit for bit the unscaled one.
 #include "motion.hpp"
 
 namespace urt::core {
@@ -16,38 +24,47 @@ uint32_t bad_target(const urt_model_t* m, const urt_ctrl_cmd_t& cmd) {
   return speed_faults(m, cmd.q);
 }
 
-void start(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const MotionStart&) {
+void start(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const MotionStart& st) {
   urt_ctrl_t* c = e.c;
   urt_speedj_state_t& sj = c->motion_state.speedj;
+  // the scale the set-point's speed qd1 was made with (this tick's has not been slewed yet)
+  const double s = c->speed_scaling * c->pause_scale;
+  const bool was_speedj = st.prev == URT_MOTION_SPEEDJ;
   double dmax = 0.0;
   for (int j = 0; j < URT_NJ; j++) {
+    // a stopped scale (0) leaves nothing to divide by: a speedj continues its own speed
+    sj.qd_s[j] = s > 0.0 ? c->qd1[j] / s : (was_speedj ? sj.qd_s[j] : 0.0);
     sj.qd_goal[j] = cmd.q[j];
-    dmax = std::fmax(dmax, std::fabs(cmd.q[j] - c->qd1[j]));
+    dmax = std::fmax(dmax, std::fabs(cmd.q[j] - sj.qd_s[j]));
   }
   double tr = dmax / cmd.a;
   for (int j = 0; j < URT_NJ; j++) {
-    sj.a[j] = tr > 0.0 ? std::fabs(cmd.q[j] - c->qd1[j]) / tr : 0.0;
+    sj.a[j] = tr > 0.0 ? std::fabs(cmd.q[j] - sj.qd_s[j]) / tr : 0.0;
   }
+  sj.tau = 0.0;
   c->motion = URT_MOTION_SPEEDJ;
 }
 
 uint32_t tick(const MotionEnv& e) {
   urt_ctrl_t* c = e.c;
-  const urt_speedj_state_t& sj = c->motion_state.speedj;
-  const double T = c->period;
+  urt_speedj_state_t& sj = c->motion_state.speedj;
+  const double T = c->period, s = e.scale;
+  sj.tau += s * T;
   bool reached = true;
   for (int j = 0; j < URT_NJ; j++) {
-    double v0 = c->qd0[j], g = sj.qd_goal[j], dv = sj.a[j] * T;
-    double v1 = std::fabs(g - v0) <= dv ? g : v0 + std::copysign(dv, g - v0);
+    double w0 = sj.qd_s[j], g = sj.qd_goal[j], dw = sj.a[j] * s * T;
+    double w1 = std::fabs(g - w0) <= dw ? g : w0 + std::copysign(dw, g - w0);
+    double v0 = c->qd0[j], v1 = w1 * s;
+    sj.qd_s[j] = w1;
     c->qd1[j] = v1;
     c->q1[j] = c->q0[j] + 0.5 * (v0 + v1) * T;
     c->qdd1[j] = (v1 - v0) / T;
-    reached = reached && v1 == g;
+    reached = reached && w1 == g;
   }
   if (reached && c->active.t <= 0.0) {
     mark_done(c, c->motion_id);  // speedj without t returns once the speed is reached
   }
-  if (c->active.t > 0.0 && c->seg_time >= c->active.t - 1e-12) {
+  if (c->active.t > 0.0 && sj.tau >= c->active.t - 1e-6 * T) {  // as the VM counts it
     mark_done(c, c->motion_id);
     start_stop(c, joint_stop_time(c, c->active.a));
   }

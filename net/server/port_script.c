@@ -7,6 +7,7 @@
 
 #include "emulator_internal.h"
 #include "urt/controller.h"
+#include "urt/core.h"
 #include "urt/errors.h"
 #include "urt/net/rt_packet.h"
 #include "urt/net/script_framer.h"
@@ -112,9 +113,16 @@ void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
   static const char *const kMode[] = {"?", "NORMAL", "REDUCED", "PROTECTIVE_STOP", "RECOVERY",
                                       "SAFEGUARD_STOP", "SYSTEM_EMERGENCY_STOP",
                                       "ROBOT_EMERGENCY_STOP", "VIOLATION", "FAULT"};
-  char line[96];
-  snprintf(line, sizeof line, "safety mode %s",
-           mode >= 1 && mode <= 9 ? kMode[mode] : "(unknown)");
+  char line[256], cause[160] = "";
+  if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP) {
+    // the controller log names what stopped the arm (the physics' causes, the controller's
+    // refusal bits), which the primary interface's messages do not carry
+    char bits[128];
+    snprintf(cause, sizeof cause, " (%s; controller fault 0x%x)",
+             urt_pstop_text(s->pstop, bits, sizeof bits), (unsigned)s->ctrl_fault);
+  }
+  snprintf(line, sizeof line, "safety mode %s%s",
+           mode >= 1 && mode <= 9 ? kMode[mode] : "(unknown)", cause);
   urt_ctrl_log_add(&e->log, s->time, mode == URT_SAFETY_MODE_NORMAL ? "INFO" : "WARN", line);
   if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP && (s->ctrl_fault & URT_CTRL_FAULT_SCRIPT_PSTOP)) {
     urt_ctrl_log_add(&e->log, s->time, "WARN", "C209A0: A protective stop was triggered");

@@ -172,7 +172,9 @@ static int b_speedj(vm *V, const us_node *n, sv *a, sv *out) {
     if (dt > ramp) ramp = dt;
   }
   if (urt__us_motion(V, n, "speedj", &c, false) != X_OK) return X_ERR;
-  return speed_wait(V, n, "speedj", c.t, ramp);
+  // the slider scales speedj (core/motion_speedj.cpp): t is motion time, and so is the ramp
+  if (c.t > 0) return urt__us_wait_scaled(V, n, c.t, "speedj");
+  return urt__us_wait_scaled(V, n, ramp, "speedj");
 }
 
 static int b_speedl(vm *V, const us_node *n, sv *a, sv *out) {

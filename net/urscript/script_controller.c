@@ -123,3 +123,28 @@ int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, cons
   }
   return X_OK;
 }
+
+/* t seconds of motion time (script_vm.h): the tick's own scaling (snapshot_at), the newest
+ * snapshot's when that tick has left the history; ends, as the controller's speedj, at the
+ * first tick whose sum reaches t (less a millionth of a period, as urt__us_wait_for) */
+int urt__us_wait_scaled(vm *V, const us_node *at, double t, const char *what) {
+  const urt_script_host_t *h = V->h->host;
+  double period = urt__us_snap(V)->period > 0 ? V->snap.period : 0.002;
+  double tau = 0.0;
+  while (tau < t - 1e-6 * period) {
+    if (urt__us_wait_tick(V, at) != X_OK) {
+      return X_ERR;
+    }
+    urt__us_snap(V);
+    if (motion_check(V, at, what) != X_OK) {
+      return X_ERR;
+    }
+    urt_snapshot_t s;
+    double scale = V->snap.speed_scaling;
+    if (h->snapshot_at && h->snapshot_at(h->ctx, V->tick, &s) == 0) {
+      scale = s.speed_scaling;
+    }
+    tau += scale * period;
+  }
+  return X_OK;
+}

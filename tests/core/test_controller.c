@@ -594,6 +594,52 @@ static void test_speed_slider__half_doubles_movej_time(void **state) {
   rig_free(&r);
 }
 
+/* the slider scales speedj as a controller does (URCL's spline execution relies on it): a
+ * speedj(qd, a, t) at scaling s moves at s·qd and lasts t/s, so each command covers the same
+ * joint distance; its id is done after t/s, not t */
+static void test_speed_slider__quarter_scales_speedj_time_and_speed(void **state) {
+  (void)state;
+  rig_t r = rig_new(NULL, 0.002, 1);
+  urt_ctrl_cmd_t sl = cmd_of(&r, URT_CTRL_SET_SPEED_SLIDER);
+  sl.value = 0.25;
+  rig_period(&r, &sl);
+  run_for(&r, 0.5);
+  assert_near(r.c->speed_scaling, 0.25, 1e-12);
+  const double qd[URT_NJ] = {0.2, -0.1, 0.1, 0.3, -0.2, 0.25};
+  double q0[URT_NJ];
+  memcpy(q0, r.c->q1, sizeof q0);
+  // a speedj of 0.2 s (100 periods at full speed) whose ramp, at a = 20, takes 15 ms
+  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SPEEDJ);
+  memcpy(c.q, qd, sizeof c.q);
+  c.a = 20.0;
+  c.t = 0.2;
+  int periods = 0;
+  rig_period(&r, &c);
+  periods++;
+  double vmid = 0.0;
+  while (r.c->motion_done_id < c.id && periods < 1000) {
+    rig_period(&r, NULL);
+    periods++;
+    if (periods == 200) {
+      vmid = r.c->qd1[3];
+    }
+  }
+  // the set-point's distance in the command: the motion-time ramp (15 ms at a) and cruise
+  const double tr = 0.3 / 20.0;
+  double worst = 0.0;
+  for (int j = 0; j < URT_NJ; j++) {
+    double want = qd[j] * (0.2 - 0.5 * tr), got = r.c->q1[j] - q0[j];
+    worst = fmax(worst, fabs(got - want));
+  }
+  print_message("speedj t = 0.2 s at slider 0.25: done after %d periods (%.3f s), speed mid-way "
+                "%.6f of the commanded %.3f rad/s, distance error %.2e rad\n",
+                periods, periods * 0.002, vmid, qd[3], worst);
+  assert_int_equal(periods, 400);
+  assert_near(vmid, 0.25 * qd[3], 1e-12);
+  assert_true(worst < 1e-9);
+  rig_free(&r);
+}
+
 static void test_controller__no_heap_allocation(void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
@@ -875,6 +921,7 @@ int main(void) {
       cmocka_unit_test(test_speedl__tool_moves_by_commanded_amount_then_stopl),
       cmocka_unit_test(test_movej__time_argument_overrides_a_and_v),
       cmocka_unit_test(test_speedj__moves_by_commanded_amount_then_stopj_to_rest),
+      cmocka_unit_test(test_speed_slider__quarter_scales_speedj_time_and_speed),
       cmocka_unit_test(test_inverse_kinematics__round_trip),
       cmocka_unit_test(test_bad_target__protective_stop_then_unlock),
       cmocka_unit_test(test_pstop__follows_the_physics),

@@ -226,10 +226,23 @@ class Urtwin:
     def alive(self):
         return self.proc is not None and self.proc.poll() is None
 
+    def save_log(self):
+        """The dashboard's saveLog: the controller log (program messages, runtime errors, safety
+        events with a protective stop's causes) lands in logs/controller_log/log_history.txt,
+        each line once, so a failed test's program end can be read after the run."""
+        try:
+            with socket.create_connection((ROBOT_IP, 29999), timeout=2) as s:
+                s.recv(256)  # the banner
+                s.sendall(b"saveLog\n")
+                s.recv(256)
+        except OSError as e:
+            print(f"  (controller log not saved: {e})")
+
     def stop(self):
         if self.proc is None:
             return
         if self.proc.poll() is None:
+            self.save_log()
             self.proc.send_signal(signal.SIGTERM)
             try:
                 self.proc.wait(timeout=10)

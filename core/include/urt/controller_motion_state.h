@@ -34,7 +34,9 @@ typedef struct urt_stop_state {
 } urt_stop_state_t;
 
 typedef struct urt_speedj_state {
-  double qd_goal[URT_NJ], a[URT_NJ];
+  double qd_goal[URT_NJ], a[URT_NJ];  /* goal speed and ramp rate, in motion time            */
+  double qd_s[URT_NJ];           /* speed in motion time (the set-point's is qd_s · scale)  */
+  double tau;                    /* motion time since the start [s]: scale per second       */
 } urt_speedj_state_t;
 
 typedef struct urt_speedl_state {

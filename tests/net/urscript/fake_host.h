@@ -131,6 +131,7 @@ static inline void fake_init(fake_host *f, urt_script_host_t *h) {
   memset(f, 0, sizeof *f);
   pthread_mutex_init(&f->mu, NULL);
   f->s.period = 0.002;
+  f->s.speed_scaling = 1.0;  /* as a controller at rest: slider 100 %, not paused */
   f->s.safety_mode = URT_SAFETY_MODE_NORMAL;
   f->s.robot_mode = URT_ROBOT_MODE_RUNNING;
   f->s.program_state = URT_PROGRAM_STOPPED;

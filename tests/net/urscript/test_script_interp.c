@@ -118,6 +118,15 @@ static void test_interp__speedj_with_t_blocks_t(void **state) {
   assert_int_equal(R.f.s.tick, 50);
 }
 
+/* the slider scales speedj (core/motion_speedj.cpp): its t is motion time, which advances at
+ * the controller's speed_scaling per second, so at 0.25 a t = 0.1 s speedj blocks 200 ticks */
+static void test_interp__speedj_t_is_motion_time_under_the_slider(void **state) {
+  R.f.s.speed_scaling = 0.25;
+  must_run("speedj([0.1, 0, 0, 0, 0, 0], 0.5, 0.1)\nspeedj([0.1, 0, 0, 0, 0, 0], 0.5, 0.002)\n");
+  assert_int_equal(R.f.n_cmd, 2);
+  assert_int_equal(R.f.s.tick, 204);
+}
+
 static void test_interp__stopj_and_stopl(void **state) {
   must_run("stopj(2)\nstopl(10)\n");
   assert_int_equal(R.f.cmd[0].kind, URT_CTRL_STOPJ);
@@ -385,6 +394,7 @@ int main(void) {
       cmocka_unit_test_setup(test_interp__blocking_motion_waits_for_the_controller, setup),
       cmocka_unit_test_setup(test_interp__servoj_blocks_t_and_maps_arguments, setup),
       cmocka_unit_test_setup(test_interp__speedj_with_t_blocks_t, setup),
+      cmocka_unit_test_setup(test_interp__speedj_t_is_motion_time_under_the_slider, setup),
       cmocka_unit_test_setup(test_interp__stopj_and_stopl, setup),
       cmocka_unit_test_setup(test_interp__sleep_counts_controller_ticks, setup),
       cmocka_unit_test_setup(test_interp__io_and_settings, setup),
