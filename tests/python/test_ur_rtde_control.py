@@ -387,10 +387,15 @@ def test_direct_torque_with_gravity_holds_still(ur5_model):
 
 
 def test_watchdog_stops_the_program_and_the_arm():
+    """rtde_set_watchdog at 4 Hz: kicked at 50 Hz the program runs; without kicks it stops
+    within 1/f, in controller time. 4 Hz rather than 10: a test process starved for 100 ms on
+    a loaded machine would miss a 10 Hz watchdog as a real client would, and the stop read
+    from this reader can be late by its own lag (up to 0.1 s seen under load)."""
+    freq = 4.0
     with Emulator() as emu:
         s = Stream(emu.host)
         c = rtde_control.RTDEControlInterface(emu.host)
-        assert c.setWatchdog(10.0)
+        assert c.setWatchdog(freq)
         t_end = time.monotonic() + 0.5
         while time.monotonic() < t_end:  # kicked at 50 Hz: keeps running
             c.kickWatchdog()
@@ -401,7 +406,7 @@ def test_watchdog_stops_the_program_and_the_arm():
         target[0] += 0.5
         c.moveJ(target, 0.5, 1.0, True)  # an asynchronous move, then no more kicks
         t_last_kick = s.latest()["time"]
-        time.sleep(0.6)
+        time.sleep(1.0 / freq + 0.5)
         stopped = [p for p in s.since(t_last_kick) if p["program_state"] != 2]
         t_stop = stopped[0]["time"] - t_last_kick if stopped else None
         time.sleep(1.0)
@@ -409,9 +414,10 @@ def test_watchdog_stops_the_program_and_the_arm():
         running = c.isProgramRunning()
         c.disconnect()
         s.close()
-    print(f"\nwatchdog 10 Hz: program stopped {t_stop * 1e3:.0f} ms after the last kick "
-          f"(bound 1/f + 0.1 s); arm |qd| {rest:.2e} rad/s afterwards")
-    assert t_stop is not None and t_stop <= 0.1 + 0.1
+    assert t_stop is not None, "the program kept running without kicks"
+    print(f"\nwatchdog {freq:.0f} Hz: program stopped {t_stop * 1e3:.0f} ms after the last kick "
+          f"(bound 1/f + 0.2 s); arm |qd| {rest:.2e} rad/s afterwards")
+    assert t_stop <= 1.0 / freq + 0.2
     assert not running and rest < 1e-3
 
 
