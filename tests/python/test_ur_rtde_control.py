@@ -133,7 +133,9 @@ def test_constructor_is_fast_and_the_script_runs(version):
         c.stopScript()
         c.disconnect()
     print(f"\n{version}: RTDEControlInterface constructor {took * 1000:.0f} ms, running {running}")
-    assert took < 1.0 and running
+    # about 80 ms here; the bound is ur_rtde's own patience (2.5 s socket timeouts; 5 s for the
+    # program to start): it catches a constructor that falls back on a timeout, not a slow machine
+    assert took < 2.5 and running
 
 
 def trapezoid_time(dist, a, v):
@@ -427,9 +429,12 @@ def test_stop_script_and_reupload():
         c = rtde_control.RTDEControlInterface(emu.host)
         t0 = s.latest()["time"]
         c.stopScript()
-        t_ret = s.latest()["time"]
-        time.sleep(0.1)
-        stopped = [p for p in s.since(t0) if p["program_state"] != 2]
+        t_end = time.monotonic() + 2.0
+        stopped = []
+        while not stopped and time.monotonic() < t_end:  # this reader may lag the controller
+            stopped = [p for p in s.since(t0) if p["program_state"] != 2]
+            time.sleep(0.005)
+        assert stopped, "the program kept playing after stopScript"
         dt = stopped[0]["time"] - t0
         t_up = time.monotonic()
         assert c.reuploadScript()
@@ -443,7 +448,9 @@ def test_stop_script_and_reupload():
         s.close()
     print(f"\nstopScript: program stopped {dt * 1e3:.0f} ms of controller time after the call; "
           f"reuploadScript: running again after {t_up * 1e3:.0f} ms")
-    assert dt <= 0.05 and running
+    # a few ms here; t0 is this reader's newest packet, which under load can lag the controller
+    # by 0.1 s, so the bound is 0.25 s of controller time
+    assert dt <= 0.25 and running
 
 
 def test_custom_script_function_then_the_control_script_again():
@@ -487,7 +494,7 @@ def test_second_control_interface_replaces_the_first():
         b.disconnect()
         s.close()
     print(f"\nsecond RTDEControlInterface: constructor {took * 1e3:.0f} ms, its moveJ error {err:.1e} rad")
-    assert took < 1.0 and err < 1e-4
+    assert took < 2.5 and err < 1e-4  # see test_constructor_is_fast_and_the_script_runs
 
 
 def test_remote_control_is_checked_for_non_local_hosts():

@@ -112,7 +112,7 @@ def test_receive_interface_every_period_equals_the_emulator(version, period):
           f"{len(irregular)} irregular steps; ur_rtde recorder: {len(rows)} rows "
           f"({distinct} distinct ticks), {compared} compared with 30003, {differ} differ, "
           f"{torn} torn by the client")
-    assert took < 1.0
+    assert took < 2.5  # ur_rtde's own 2.5 s timeouts: a constructor that waited one out
     assert irregular == []
     assert abs(len(wire) - 10.0 / period) <= 0.01 * 10.0 / period
     assert compared > 0.9 * len(rows) and differ == 0 and torn < 0.1 * compared
@@ -189,24 +189,27 @@ def test_dashboard_power_cycle_load_play_stop():
                 seen.append(m)
                 return m
 
+            def until(pred, timeout=2.0):
+                """The reply comes when the command is queued; the controller applies it in a
+                later period, which a loaded machine can delay past a fixed sleep."""
+                t_end = time.monotonic() + timeout
+                while not pred() and time.monotonic() < t_end:
+                    time.sleep(0.01)
+                return pred()
+
             d.powerOff()
-            time.sleep(0.1)
-            assert "POWER_OFF" in mode()
+            assert until(lambda: "POWER_OFF" in mode())
             d.powerOn()
-            time.sleep(0.1)
-            assert "IDLE" in mode()
+            assert until(lambda: "IDLE" in mode())
             d.brakeRelease()
-            time.sleep(0.1)
-            assert "RUNNING" in mode()
+            assert until(lambda: "RUNNING" in mode())
             d.loadURP("square.script")
             assert "STOPPED square.script" in d.programState()
             d.play()  # ur_rtde throws unless the reply is exactly "Starting program"
-            time.sleep(0.2)
-            assert d.running()
+            assert until(d.running)
             state_playing = d.programState()
             d.stop()  # throws unless "Stopped"
-            time.sleep(0.2)
-            assert not d.running()
+            assert until(lambda: not d.running())
             state_stopped = d.programState()
             print(f"\nrobot modes {seen}; {state_playing!r} then {state_stopped!r}; "
                   f"{d.polyscopeVersion()!r}, serial {d.getSerialNumber()}, "
