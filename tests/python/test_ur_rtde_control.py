@@ -213,9 +213,11 @@ def test_servoj_sine_tracks_with_the_lookahead_lag_then_servo_stop(hogs):
     also beside two busy processes. The gain and lookahead are URCL's and the ROS 2 driver's
     (2000, 0.03 s); the sine is tests/urcl/ros2_driver_pattern's (0.2 rad, 0.2 Hz): servoj
     smooths, so what is left after the lag grows with the sine's frequency (1.2e-3 rad at 0.5 Hz
-    here). Not met, and not run: without --rt-priority beside the hogs (1.4e-2 rad), because the
-    URScript thread, descheduled, hands the controller its servoj targets late, and the physics
-    thread must not wait for it."""
+    here). Stretches where the client sent no new command for 3+ ticks are left out (see
+    command_gaps; at most a quarter of the ticks). Not met, and not run: without --rt-priority
+    beside the hogs (2.1e-3 rad on what is left, 63 % of the ticks in gaps; 1.4e-2 rad before
+    gaps were left out), because the client is starved and the URScript thread, descheduled,
+    hands the controller its servoj targets late, and the physics thread must not wait for it."""
     period, lookahead, gain = 0.002, 0.03, 2000
     amp, freq, seconds = 0.2, 0.2, 5.0
     rt_client = ["chrt", "-f", "50"] if RT_ARGS else []
@@ -244,39 +246,64 @@ def test_servoj_sine_tracks_with_the_lookahead_lag_then_servo_stop(hogs):
         other.close()
     import bisect
 
-    def best_lag(reference):
+    def best_lag(reference, gaps=()):
         """The lag that best aligns, in least squares, the actual base angle with a (time,
-        command) reference, and the largest residual at that lag. Least squares, not minimax:
-        a single late wake-up of a client or emulator thread on a loaded machine shifts one
-        stretch of the stream, and must not decide the lag of the whole stream."""
+        command) reference, and the largest residual at that lag, leaving out the ticks whose
+        lagged reference falls near one of `gaps` (stretches where no new command came). Least
+        squares, not minimax: a single late wake-up of a client or emulator thread on a loaded
+        machine shifts one stretch of the stream, and must not decide the lag of the whole
+        stream."""
         ts = [t for t, _ in reference]
 
         def command_at(t):
             return reference[max(bisect.bisect_right(ts, t) - 1, 0)][1]
         mid = [p for p in s.packets if 1.5 < p["time"] - sent[0][0] < seconds - 0.5]
 
+        def judged(p, lag):
+            t = p["time"] - lag
+            return not any(a - 0.01 <= t <= b + lookahead + 0.05 for a, b in gaps)
+
         def residuals(lag):
-            return [p["q_actual"][0] - command_at(p["time"] - lag) for p in mid]
+            return [p["q_actual"][0] - command_at(p["time"] - lag) for p in mid if judged(p, lag)]
         lag = min((i * period for i in range(0, 150)),
                   key=lambda lag: sum(e * e for e in residuals(lag)))
-        return lag, max(abs(e) for e in residuals(lag))
+        return lag, max(abs(e) for e in residuals(lag)), 1 - len(residuals(lag)) / len(mid)
+
+    def command_gaps(held):
+        """Stretches of 3 or more ticks in which the controller got no new command: the client
+        sent late (a preempted client or vCPU). Holding the last target there is what servoj
+        does; the arm then follows that staircase, not the sine delayed by the lookahead, so
+        those stretches say nothing about the emulator's tracking. One repeated tick is the
+        client's 500 Hz clock drifting past the controller's and stays judged."""
+        out, start = [], None
+        for (t0, a), (t1, b) in zip(held, held[1:]):
+            if b == a and start is None:
+                start = t0
+            elif b != a and start is not None:
+                if t1 - start >= 3 * period - 1e-9:
+                    out.append((start, t1))
+                start = None
+        return out
 
     # the emulator's lag is judged from the command as it reached the controller (the register
     # read-back): how late a client sends is not the emulator's; the lag from the commands as
     # sent (clock of ur_rtde's receive thread) is printed beside it
     held = [(v["timestamp"], v["input_double_register_0"]) for v in other.values
             if v["timestamp"] >= sent[0][0]]
-    lag_held, res_held = best_lag(held)
-    lag_sent, res_sent = best_lag(sent)
+    gaps = command_gaps(held)
+    lag_held, res_held, left_out = best_lag(held, gaps)
+    lag_sent, res_sent, _ = best_lag(sent)
     print(f"\nservoJ {freq} Hz sine streamed by ur_rtde ({hogs} CPU hogs, emulator "
           f"{'real-time' if RT_ARGS else 'plain'}, client "
           f"{'SCHED_FIFO' if rt_client else 'plain'}): lag {lag_held * 1e3:.0f} ms from the "
           f"command as held by the controller (lookahead {lookahead * 1e3:.0f} ms), residual "
-          f"{res_held:.2e} rad; lag {lag_sent * 1e3:.0f} ms from the command as sent, residual "
+          f"{res_held:.2e} rad ({len(gaps)} gaps of 3+ ticks without a new command, "
+          f"{100 * left_out:.1f} % of the ticks left out around them); lag {lag_sent * 1e3:.0f} ms from the command as sent, residual "
           f"{res_sent:.2e} rad; after servoStop |qd| {rest:.2e} rad/s; irregular steps: 30003 "
           f"{s.irregular()}, other RTDE client {other.irregular()} of {len(other.ts)}")
     assert abs(lag_held - lookahead) <= 0.004 + 1e-9
     assert res_held <= 1e-3
+    assert left_out <= 0.25, "the client sent too irregularly to judge the tracking"
     assert rest < 1e-3
     assert s.irregular() == 0 and other.irregular() == 0 and len(other.ts) > 2500
 
