@@ -488,8 +488,9 @@ def test_custom_script_function_then_the_control_script_again():
                                         "set_standard_digital_out(5, True)\n")
         took = time.monotonic() - t0
         s = Stream(emu.host)
-        time.sleep(0.05)
-        do5 = int(s.latest()["digital_outputs"]) >> 5 & 1
+        t_end = time.monotonic() + 2.0  # this reader may lag the controller
+        while not (do5 := int(s.latest()["digital_outputs"]) >> 5 & 1) and time.monotonic() < t_end:
+            time.sleep(0.005)
         t_up = time.monotonic()
         while not c.isProgramRunning() and time.monotonic() - t_up < 2.0:
             time.sleep(0.005)
