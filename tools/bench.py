@@ -381,8 +381,8 @@ def print_table(res):
               "(raw - reference, median)")
     print("-" * len(hdr))
     for r in res["ratios"] + b.get("standing_ratios", []):
-        print(f"ratio at {rate(r['dt']):>7}: {r['numerator']} / {r['denominator']:<48} "
-              f"= {r['value']:7.2f}")
+        what = f"{r['numerator']} / {r['denominator']}"
+        print(f"ratio at {rate(r['dt']):>7}: {what:<80} = {r['value']:7.2f}")
     if aba["status"] == "ok":
         if "binding_overhead_median_us" in aba:
             cost = f"measured here as raw - native = {aba['binding_overhead_median_us']:.2f} us"
