@@ -353,6 +353,12 @@ def print_table(res):
             row(f"urt_step {rate(r['dt'])}{faults}", r["dt"], r)
         else:
             print(f"{'urt_step ' + rate(r['dt']):<40} error: {r.get('error', '')}")
+    # the arm holding q0 (set-point at rest): the drives' friction refines the step near zero speed
+    for r in urt.get("standing_runs", []):
+        if r["status"] == "ok":
+            row(f"urt_step {rate(r['dt'])}, standing", r["dt"], r)
+        else:
+            print(f"{'urt_step ' + rate(r['dt']) + ', standing':<40} error: {r.get('error', '')}")
     mj = b["mujoco"]
     if mj["status"] != "ok":
         print(f"{'mj_step (MuJoCo)':<40} {mj['status']}: {mj.get('error', '')}")
@@ -374,9 +380,9 @@ def print_table(res):
         print(f"{'pin.aba Python loop, corrected':<40} {'-':>7} {c:9.3f}  "
               "(raw - reference, median)")
     print("-" * len(hdr))
-    for r in res["ratios"]:
-        print(f"ratio at {rate(r['dt']):>7}: {r['numerator']} / {r['denominator']:<48} "
-              f"= {r['value']:7.2f}")
+    for r in res["ratios"] + b.get("standing_ratios", []):
+        what = f"{r['numerator']} / {r['denominator']}"
+        print(f"ratio at {rate(r['dt']):>7}: {what:<80} = {r['value']:7.2f}")
     if aba["status"] == "ok":
         if "binding_overhead_median_us" in aba:
             cost = f"measured here as raw - native = {aba['binding_overhead_median_us']:.2f} us"

@@ -7,7 +7,10 @@
 //
 // For every dt it loads the model with "<dt-key>=<dt>" added to the overrides, starts at rest,
 // drives a moving sine set-point on all joints and times each urt_step with CLOCK_MONOTONIC
-// into a preallocated array. All cases (urt at each dt, MuJoCo variants) are timed round robin
+// into a preallocated array. A standing case at every dt holds the arm at q0 (set-point at rest):
+// at low joint speed the drives' friction refines the step (stick-slip), so it is timed too and
+// reported beside the moving one, with its ratio to mj_step (JSON "standing_runs" and
+// "standing_ratios"; never asserted). All cases (urt at each dt, MuJoCo variants) are timed round robin
 // in chunks (--chunk), so load changes on the machine hit them alike. MuJoCo (bench_mujoco.h)
 // is dlopen'ed, so the benchmark builds and runs without it; if it cannot be loaded the JSON and
 // the table say "unavailable". Only medians, percentiles and ratios are reported — never a pass/fail on time:
@@ -25,6 +28,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
@@ -214,6 +218,7 @@ struct UrtRun {
   unsigned pstop = 0, isat_count = 0, vsat_count = 0;
   double max_track_err = 0;    // max |q_set − q| over the timed steps [rad]
   int faults = 0;              // faults active during the run (kBenchFaults), 0: healthy
+  bool standing = false;       // set-point at rest at q0 (the arm holding a pose)
 };
 
 // the model as loaded at the first rate, for the JSON (bench.py builds Pinocchio from it)
@@ -282,8 +287,10 @@ class UrtCase {
 
   // load at dt (the user's overrides, then dt) and start at rest; on failure r.status is
   // "error" and the case is never stepped
-  UrtCase(const Options &o, double dt, ArmDump *dump, bool faulted = false) {
+  UrtCase(const Options &o, double dt, ArmDump *dump, bool faulted = false,
+          bool standing = false) {
     r.dt = dt;
+    r.standing = standing;
     m_ = load_model(o, dt, &r.error);
     if (!m_) {
       r.status = "error";
@@ -299,6 +306,10 @@ class UrtCase {
     }
 
     sp_ = make_setpoint(m, o.speed);
+    if (standing) {
+      // q = q0, q̇ = q̈ = 0 at every step: the arm holds its start pose against gravity
+      std::fill(std::begin(sp_.amp), std::end(sp_.amp), 0.0);
+    }
     if (dump != nullptr && !dump->valid) {
       dump->valid = true;
       dump->arm = m->arm;
@@ -506,10 +517,10 @@ struct Report {
   std::vector<MjRun> mj;
 };
 
-// the healthy run at dt, or nullptr
+// the healthy moving run at dt, or nullptr
 const UrtRun *healthy_at(const std::vector<UrtRun> &runs, double dt) {
   for (const auto &r : runs) {
-    if (r.faults == 0 && r.status == "ok" && r.dt == dt) {
+    if (r.faults == 0 && !r.standing && r.status == "ok" && r.dt == dt) {
       return &r;
     }
   }
@@ -554,6 +565,9 @@ std::string to_json(const Options &o, const Report &rep) {
   j.num("speed_rad_s", o.speed);
   j.begin_array("runs");
   for (const auto &r : rep.urt) {
+    if (r.standing) {
+      continue;
+    }
     j.begin_object();
     j.num("dt", r.dt);
     j.num("rate_hz", 1.0 / r.dt);
@@ -568,6 +582,30 @@ std::string to_json(const Options &o, const Report &rep) {
       j.integer("pstop", r.pstop);
       j.integer("isat_count", r.isat_count);
       j.integer("vsat_count", r.vsat_count);
+      j.num("max_tracking_error_rad", r.max_track_err);
+    }
+    j.end_object();
+  }
+  j.end_array();
+  // the arm holding q0 (set-point at rest), same layout as "runs"
+  j.str("standing_setpoint", "q = q0, qd = qdd = 0 (the arm holding its start pose)");
+  j.begin_array("standing_runs");
+  for (const auto &r : rep.urt) {
+    if (!r.standing) {
+      continue;
+    }
+    j.begin_object();
+    j.num("dt", r.dt);
+    j.num("rate_hz", 1.0 / r.dt);
+    j.integer("faults", r.faults);
+    j.str("status", r.status);
+    if (r.status != "ok") {
+      j.str("error", r.error);
+    } else {
+      json_stats(j, r.stats, r.dt);
+      j.integer("step_errors", r.step_errors);
+      j.integer("refused_commands", r.refused_commands);
+      j.integer("pstop", r.pstop);
       j.num("max_tracking_error_rad", r.max_track_err);
     }
     j.end_object();
@@ -651,7 +689,7 @@ std::string to_json(const Options &o, const Report &rep) {
     j.end_object();
   }
   for (const auto &u : rep.urt) {
-    if (u.status != "ok" || u.faults) {
+    if (u.status != "ok" || u.faults || u.standing) {
       continue;
     }
     for (const auto &v : kMjVariants) {
@@ -665,6 +703,38 @@ std::string to_json(const Options &o, const Report &rep) {
       j.str("denominator", std::string("mj_step median (") + v.name + ")");
       j.num("value", u.stats.median_us / mr->stats.median_us);
       j.num("p99_value", u.stats.p99_us / mr->stats.p99_us);
+      j.end_object();
+    }
+  }
+  j.end_array();
+  // the standing arm against the same mj_step runs (MuJoCo's cost does not depend on the motion:
+  // no contacts, one step per call) and against the moving urt_step
+  j.begin_array("standing_ratios");
+  for (const auto &u : rep.urt) {
+    if (u.status != "ok" || !u.standing) {
+      continue;
+    }
+    for (const auto &v : kMjVariants) {
+      const MjRun *mr = find_mj(rep.mj, v.name, u.dt);
+      if (mr == nullptr) {
+        continue;
+      }
+      j.begin_object();
+      j.num("dt", u.dt);
+      j.str("numerator", "urt_step median, standing arm");
+      j.str("denominator", std::string("mj_step median (") + v.name + ")");
+      j.num("value", u.stats.median_us / mr->stats.median_us);
+      j.num("p99_value", u.stats.p99_us / mr->stats.p99_us);
+      j.end_object();
+    }
+    const UrtRun *h = healthy_at(rep.urt, u.dt);
+    if (h != nullptr) {
+      j.begin_object();
+      j.num("dt", u.dt);
+      j.str("numerator", "urt_step median, standing arm");
+      j.str("denominator", "urt_step median (moving set-point, same run)");
+      j.num("value", u.stats.median_us / h->stats.median_us);
+      j.num("p99_value", u.stats.p99_us / h->stats.p99_us);
       j.end_object();
     }
   }
@@ -692,7 +762,8 @@ void print_table(const Options &o, const Report &rep) {
   }
   for (const auto &r : rep.urt) {
     std::string name = "urt_step " + rate_label(r.dt) +
-                       (r.faults ? ", " + std::to_string(r.faults) + " faults" : "");
+                       (r.faults ? ", " + std::to_string(r.faults) + " faults" : "") +
+                       (r.standing ? ", standing" : "");
     if (r.status == "ok") {
       print_row(name, r.dt, r.stats);
     } else {
@@ -723,9 +794,9 @@ void print_table(const Options &o, const Report &rep) {
     for (const auto &v : kMjVariants) {
       const MjRun *mr = find_mj(rep.mj, v.name, u.dt);
       if (mr != nullptr) {
-        printf("ratio urt_step / mj_step(%s) at %s: %.2f (median), %.2f (p99)\n", v.name,
-               rate_label(u.dt).c_str(), u.stats.median_us / mr->stats.median_us,
-               u.stats.p99_us / mr->stats.p99_us);
+        printf("ratio urt_step%s / mj_step(%s) at %s: %.2f (median), %.2f (p99)\n",
+               u.standing ? " standing" : "", v.name, rate_label(u.dt).c_str(),
+               u.stats.median_us / mr->stats.median_us, u.stats.p99_us / mr->stats.p99_us);
       }
     }
   }
@@ -774,6 +845,10 @@ int main(int argc, char **argv) {
     }
     // the same workload at the first rate with five faults active, interleaved with the rest
     urt_cases.push_back(std::make_unique<UrtCase>(o, o.dts.front(), nullptr, true));
+    // the arm holding q0 at every rate
+    for (double dt : o.dts) {
+      urt_cases.push_back(std::make_unique<UrtCase>(o, dt, nullptr, false, true));
+    }
   }
 
   // MuJoCo gets the same arm, drives' inertia and friction, and set-point, from the same file
