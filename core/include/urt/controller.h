@@ -262,9 +262,9 @@ typedef struct urt_ctrl {
   uint32_t faults_applied, faults_refused;
 
   /* a speedj stream's debt (core/motion_speedj.cpp): the speed (motion time) still behind the
-   * on-time stream after a program's speedj came late, and the tick whose period last ran a
-   * speedj (the next speedj inherits the debt when it follows at once) */
-  double speedj_owed[URT_NJ];
+   * on-time stream after a program's speedj came late, the speed a speedj last ran at, and the
+   * tick whose period that was (the next speedj inherits the debt when it follows at once) */
+  double speedj_owed[URT_NJ], speedj_w[URT_NJ];
   uint64_t speedj_tick;
 } urt_ctrl_t;
 
