@@ -10,6 +10,24 @@
 // the same joint distance. URCL's spline execution relies on it (one speedj per step of its
 // spline time; its speed-scaling test expects each step to hold 1/s controller cycles). At
 // s = 1 the set-point is bit for bit the unscaled one.
+//
+// A program's speedj that reaches the controller late makes up the lost speed. The program runs
+// on a thread paired to the controller tick by tick (net/urscript/README.md); when that thread
+// is descheduled, the controller goes on without it (the previous speedj's t runs out and the
+// arm begins to stop at its a), and the thread then runs the missed ticks back to back: their
+// commands arrive late, several in one period, each stamped with the tick that issued it
+// (urt_ctrl_cmd_t.tick). URCL's spline runs one speedj(qd, a, steptime) per period with a = the
+// change of its own speed over that period, so from the speed the arm kept it could only ever
+// reach the previous period's goal: the lag stayed through the whole acceleration phase, a 2 s
+// spline ended 2–8 mrad short of its target, and the 10 ms spline after it closed the gap at
+// 170 rad/s² (a protective stop, torque limit; URCL's trajectory_streaming tests, e-Series). On
+// a controller the program runs every period and the command would have come in time. So a
+// speedj late by L > 0 periods (or superseding, in the same period, one that was) owes what the
+// arm's speed lost since the last speedj ran plus L periods of its ramp (a·T each), never past
+// its goal, and each period the ramp may go up to a·T further until that is paid (at most twice
+// the commanded acceleration; the next on-time speedj of the stream inherits the debt; reaching
+// a goal clears it). The position lost while the program was late (about L²·a·T² per event) is
+// not made up. On time nothing changes.
 #include "motion.hpp"
 
 namespace urt::core {
@@ -30,6 +48,14 @@ void start(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const MotionStart& st)
   // the scale the set-point's speed qd1 was made with (this tick's has not been slewed yet)
   const double s = c->speed_scaling * c->pause_scale;
   const bool was_speedj = st.prev == URT_MOTION_SPEEDJ;
+  // periods late: since the tick that issued it; or as the late speedj it supersedes before
+  // that one ever ran
+  const double own = cmd.tick && c->tick > cmd.tick ? (double)(c->tick - cmd.tick) : 0.0;
+  const double late = std::fmax(own, was_speedj && sj.fresh != 0.0 ? sj.late : 0.0);
+  // the speed the last speedj ran at, if it ran just before the program fell behind
+  const bool last_w = c->speedj_tick != 0 && c->tick - c->speedj_tick <= (uint64_t)late;
+  // the stream goes on at once (the previous period ran a speedj, whose t has just run out)
+  const bool follows = c->speedj_tick != 0 && c->speedj_tick == c->tick;
   double dmax = 0.0;
   for (int j = 0; j < URT_NJ; j++) {
     // a stopped scale (0) leaves nothing to divide by: a speedj continues its own speed
@@ -39,8 +65,20 @@ void start(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const MotionStart& st)
   }
   double tr = dmax / cmd.a;
   for (int j = 0; j < URT_NJ; j++) {
-    sj.a[j] = tr > 0.0 ? std::fabs(cmd.q[j] - sj.qd_s[j]) / tr : 0.0;
+    const double gap = std::fabs(cmd.q[j] - sj.qd_s[j]);
+    sj.a[j] = tr > 0.0 ? gap / tr : 0.0;
+    const double ramp = sj.a[j] * s * c->period;
+    if (late > 0.0) {
+      // behind the on-time stream by what the arm lost since the last speedj ran and by the
+      // ramp of the periods missed (never past this one's goal)
+      const double lost = last_w ? std::fabs(c->speedj_w[j] - sj.qd_s[j]) : 0.0;
+      c->speedj_owed[j] = std::fmin(std::fmax(0.0, gap - ramp), lost + late * ramp);
+    } else {
+      c->speedj_owed[j] = follows ? std::fmin(c->speedj_owed[j], gap) : 0.0;
+    }
   }
+  sj.late = late;
+  sj.fresh = 1.0;
   sj.tau = 0.0;
   c->motion = URT_MOTION_SPEEDJ;
 }
@@ -52,15 +90,20 @@ uint32_t tick(const MotionEnv& e) {
   sj.tau += s * T;
   bool reached = true;
   for (int j = 0; j < URT_NJ; j++) {
-    double w0 = sj.qd_s[j], g = sj.qd_goal[j], dw = sj.a[j] * s * T;
+    const double ramp = sj.a[j] * s * T, extra = std::fmin(c->speedj_owed[j], ramp);
+    double w0 = sj.qd_s[j], g = sj.qd_goal[j], dw = ramp + extra;
     double w1 = std::fabs(g - w0) <= dw ? g : w0 + std::copysign(dw, g - w0);
     double v0 = c->qd0[j], v1 = w1 * s;
     sj.qd_s[j] = w1;
+    c->speedj_w[j] = w1;
+    c->speedj_owed[j] = w1 == g ? 0.0 : std::fmax(0.0, c->speedj_owed[j] - std::fmax(0.0, std::fabs(w1 - w0) - ramp));
     c->qd1[j] = v1;
     c->q1[j] = c->q0[j] + 0.5 * (v0 + v1) * T;
     c->qdd1[j] = (v1 - v0) / T;
     reached = reached && w1 == g;
   }
+  sj.fresh = 0.0;
+  c->speedj_tick = c->tick;
   if (reached && c->active.t <= 0.0) {
     mark_done(c, c->motion_id);  // speedj without t returns once the speed is reached
   }

@@ -29,8 +29,12 @@ int urt__us_wait_tick(vm *V, const us_node *at) {
 }
 
 int urt__us_submit(vm *V, const us_node *at, const urt_ctrl_cmd_t *cmd) {
+  // stamped with the tick whose slice issues it: the controller sees how late it comes
+  // (a runner thread woken late delivers several ticks' commands at once; core/motion_speedj.cpp)
+  urt_ctrl_cmd_t stamped = *cmd;
+  stamped.tick = V->tick;
   for (int tries = 0; tries <= SUBMIT_RETRY_TICKS; tries++) {
-    if (V->h->host->submit(V->h->host->ctx, cmd)) {
+    if (V->h->host->submit(V->h->host->ctx, &stamped)) {
       return X_OK;
     }
     if (V->prog->secondary) {

@@ -123,14 +123,21 @@ static uint32_t g_motions, g_faults, g_pstops;  /* what a scenario went through 
 /* the controller without its motion state (everything before it and after it), and the data */
 static void fold(const rig_t *r) {
   const unsigned char *c = (const unsigned char *)r->c;
-  const size_t head = offsetof(urt_ctrl_t, active) + sizeof r->c->active;
+  // the command's tick stamp (urt_ctrl_cmd_t.tick, last in it) came after the rows were
+  // recorded; the scenarios' commands are not a program's (0)
+  const size_t head = offsetof(urt_ctrl_t, active) + offsetof(urt_ctrl_cmd_t, tick);
   const size_t tail = offsetof(urt_ctrl_t, q0);
   g_hash = fnv(g_hash, c, head);
   // the inputs (digital_in onwards, last in the struct) came after the rows were recorded;
   // then the struct ended at the next multiple of 8, in zeroed padding
   const size_t end = offsetof(urt_ctrl_t, digital_in);
   static const unsigned char zeros[8];
-  g_hash = fnv(g_hash, c + tail, end - tail);
+  // (each of the controller's commands without its tick stamp, see above)
+  const size_t stamp = offsetof(urt_ctrl_cmd_t, tick), cmd_end = sizeof(urt_ctrl_cmd_t);
+  const size_t pending = offsetof(urt_ctrl_t, pending), force = offsetof(urt_ctrl_t, force);
+  g_hash = fnv(g_hash, c + tail, pending + stamp - tail);
+  g_hash = fnv(g_hash, c + pending + cmd_end, force + stamp - (pending + cmd_end));
+  g_hash = fnv(g_hash, c + force + cmd_end, end - (force + cmd_end));
   g_hash = fnv(g_hash, zeros, (8 - end % 8) % 8);
   // the command's tail padding is whatever the caller's stack held (urt_command_set copies it)
   urt_data_t d = *r->d;

@@ -181,6 +181,9 @@ typedef struct urt_ctrl_cmd {
   double lookahead_time; /* servoj                                     */
   double gain;           /* servoj                                     */
   double value;          /* digital/analog value, slider, payload mass */
+  uint64_t tick;         /* a program's command: the controller tick whose slice issued it
+                            (urt_ctrl_t.tick when it was issued); applied on time at that tick's
+                            end, later when the program's thread ran late. 0: not stamped */
 } urt_ctrl_cmd_t;
 
 /* Why the controller refused or aborted something (bits in urt_ctrl_t.fault, copied to the
@@ -257,6 +260,12 @@ typedef struct urt_ctrl {
 
   /* added by the fault issue: live fault commands (URT_CTRL_FAULT) applied and refused */
   uint32_t faults_applied, faults_refused;
+
+  /* a speedj stream's debt (core/motion_speedj.cpp): the speed (motion time) still behind the
+   * on-time stream after a program's speedj came late, the speed a speedj last ran at, and the
+   * tick whose period that was (the next speedj inherits the debt when it follows at once) */
+  double speedj_owed[URT_NJ], speedj_w[URT_NJ];
+  uint64_t speedj_tick;
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or

@@ -37,6 +37,8 @@ typedef struct urt_speedj_state {
   double qd_goal[URT_NJ], a[URT_NJ];  /* goal speed and ramp rate, in motion time            */
   double qd_s[URT_NJ];           /* speed in motion time (the set-point's is qd_s · scale)  */
   double tau;                    /* motion time since the start [s]: scale per second       */
+  double late;                   /* periods this speedj came late (or the one it superseded)  */
+  double fresh;                  /* 1 until its first period: superseded then, it never ramped */
 } urt_speedj_state_t;
 
 typedef struct urt_speedl_state {
