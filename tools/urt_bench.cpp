@@ -563,54 +563,36 @@ std::string to_json(const Options &o, const Report &rep) {
   j.str("timed", "urt_step only (urt_command_set runs between steps, untimed)");
   j.str("setpoint", "q = q0 + A(1 - cos wt), f = 0.25..0.5 Hz per joint, peak speed <= --speed");
   j.num("speed_rad_s", o.speed);
-  j.begin_array("runs");
-  for (const auto &r : rep.urt) {
-    if (r.standing) {
-      continue;
+  // the moving set-point's runs, then the arm holding q0 (set-point at rest), in one layout
+  auto runs = [&](const char *key, bool standing) {
+    j.begin_array(key);
+    for (const auto &r : rep.urt) {
+      if (r.standing != standing) {
+        continue;
+      }
+      j.begin_object();
+      j.num("dt", r.dt);
+      j.num("rate_hz", 1.0 / r.dt);
+      j.integer("faults", r.faults);
+      j.str("status", r.status);
+      if (r.status != "ok") {
+        j.str("error", r.error);
+      } else {
+        json_stats(j, r.stats, r.dt);
+        j.integer("step_errors", r.step_errors);
+        j.integer("refused_commands", r.refused_commands);
+        j.integer("pstop", r.pstop);
+        j.integer("isat_count", r.isat_count);
+        j.integer("vsat_count", r.vsat_count);
+        j.num("max_tracking_error_rad", r.max_track_err);
+      }
+      j.end_object();
     }
-    j.begin_object();
-    j.num("dt", r.dt);
-    j.num("rate_hz", 1.0 / r.dt);
-    j.integer("faults", r.faults);
-    j.str("status", r.status);
-    if (r.status != "ok") {
-      j.str("error", r.error);
-    } else {
-      json_stats(j, r.stats, r.dt);
-      j.integer("step_errors", r.step_errors);
-      j.integer("refused_commands", r.refused_commands);
-      j.integer("pstop", r.pstop);
-      j.integer("isat_count", r.isat_count);
-      j.integer("vsat_count", r.vsat_count);
-      j.num("max_tracking_error_rad", r.max_track_err);
-    }
-    j.end_object();
-  }
-  j.end_array();
-  // the arm holding q0 (set-point at rest), same layout as "runs"
+    j.end_array();
+  };
+  runs("runs", false);
   j.str("standing_setpoint", "q = q0, qd = qdd = 0 (the arm holding its start pose)");
-  j.begin_array("standing_runs");
-  for (const auto &r : rep.urt) {
-    if (!r.standing) {
-      continue;
-    }
-    j.begin_object();
-    j.num("dt", r.dt);
-    j.num("rate_hz", 1.0 / r.dt);
-    j.integer("faults", r.faults);
-    j.str("status", r.status);
-    if (r.status != "ok") {
-      j.str("error", r.error);
-    } else {
-      json_stats(j, r.stats, r.dt);
-      j.integer("step_errors", r.step_errors);
-      j.integer("refused_commands", r.refused_commands);
-      j.integer("pstop", r.pstop);
-      j.num("max_tracking_error_rad", r.max_track_err);
-    }
-    j.end_object();
-  }
-  j.end_array();
+  runs("standing_runs", true);
   j.end_object();
 
   // the arm as the core loaded it, in urt_config's JSON layout
