@@ -656,19 +656,25 @@ std::string to_json(const Options &o, const Report &rep) {
 
   // urt_step / mj_step medians at the same dt, for every MuJoCo variant measured; and the
   // faulted step against the healthy one
+  // one ratio of medians (and of p99s) at a step dt
+  auto ratio = [&](double dt, const std::string &num, const std::string &den, const Stats &a,
+                   const Stats &b) {
+    j.begin_object();
+    j.num("dt", dt);
+    j.str("numerator", num);
+    j.str("denominator", den);
+    j.num("value", a.median_us / b.median_us);
+    j.num("p99_value", a.p99_us / b.p99_us);
+    j.end_object();
+  };
   j.begin_array("ratios");
   for (const auto &f : rep.urt) {
     const UrtRun *h = healthy_at(rep.urt, f.dt);
     if (f.faults == 0 || f.status != "ok" || h == nullptr) {
       continue;
     }
-    j.begin_object();
-    j.num("dt", f.dt);
-    j.str("numerator", "urt_step median, " + std::to_string(f.faults) + " faults active");
-    j.str("denominator", "urt_step median (healthy, same run)");
-    j.num("value", f.stats.median_us / h->stats.median_us);
-    j.num("p99_value", f.stats.p99_us / h->stats.p99_us);
-    j.end_object();
+    ratio(f.dt, "urt_step median, " + std::to_string(f.faults) + " faults active",
+          "urt_step median (healthy, same run)", f.stats, h->stats);
   }
   for (const auto &u : rep.urt) {
     if (u.status != "ok" || u.faults || u.standing) {
@@ -679,13 +685,8 @@ std::string to_json(const Options &o, const Report &rep) {
       if (mr == nullptr) {
         continue;
       }
-      j.begin_object();
-      j.num("dt", u.dt);
-      j.str("numerator", "urt_step median");
-      j.str("denominator", std::string("mj_step median (") + v.name + ")");
-      j.num("value", u.stats.median_us / mr->stats.median_us);
-      j.num("p99_value", u.stats.p99_us / mr->stats.p99_us);
-      j.end_object();
+      ratio(u.dt, "urt_step median", std::string("mj_step median (") + v.name + ")", u.stats,
+            mr->stats);
     }
   }
   j.end_array();
@@ -701,23 +702,13 @@ std::string to_json(const Options &o, const Report &rep) {
       if (mr == nullptr) {
         continue;
       }
-      j.begin_object();
-      j.num("dt", u.dt);
-      j.str("numerator", "urt_step median, standing arm");
-      j.str("denominator", std::string("mj_step median (") + v.name + ")");
-      j.num("value", u.stats.median_us / mr->stats.median_us);
-      j.num("p99_value", u.stats.p99_us / mr->stats.p99_us);
-      j.end_object();
+      ratio(u.dt, "urt_step median, standing arm", std::string("mj_step median (") + v.name + ")",
+            u.stats, mr->stats);
     }
     const UrtRun *h = healthy_at(rep.urt, u.dt);
     if (h != nullptr) {
-      j.begin_object();
-      j.num("dt", u.dt);
-      j.str("numerator", "urt_step median, standing arm");
-      j.str("denominator", "urt_step median (moving set-point, same run)");
-      j.num("value", u.stats.median_us / h->stats.median_us);
-      j.num("p99_value", u.stats.p99_us / h->stats.p99_us);
-      j.end_object();
+      ratio(u.dt, "urt_step median, standing arm", "urt_step median (moving set-point, same run)",
+            u.stats, h->stats);
     }
   }
   j.end_array();
