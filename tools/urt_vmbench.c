@@ -47,7 +47,7 @@ static uint64_t b_wait(void *ctx, uint64_t after, int timeout_ms) {
 
 static void b_snapshot(void *ctx, urt_snapshot_t *out) { *out = ((bench_host *)ctx)->s; }
 static void b_message(void *ctx, const urt_script_msg_t *m) { (void)ctx; (void)m; }
-static void b_read_registers(void *ctx, urt_rtde_registers_t *out) { memset(out, 0, sizeof *out); }
+static void b_read_registers(void *ctx, uint64_t tick, urt_rtde_registers_t *out) { (void)tick; memset(out, 0, sizeof *out); }
 static void b_write_register(void *ctx, int kind, int index, double value) {}
 
 static int cmp(const void *a, const void *b) {

@@ -395,6 +395,7 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   }
   pthread_mutex_init(&e->msg_lock, NULL);
   pthread_mutex_init(&e->reg_lock, NULL);
+  urt__inputs_latch(e, 0);  // the bank as it starts holds from tick 1
   urt_primary_robot_info_from_model(&e->cfg.version, e->m, &e->info);
   e->state_every = (uint64_t)(0.1 / urt_loop_period(loop) + 0.5);  // 10 Hz
   urt_rtde_registry_init(&e->rtde_registry);

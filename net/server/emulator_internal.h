@@ -35,6 +35,7 @@ typedef enum port_kind {
 } port_kind_t;
 
 #define MSG_QUEUE 256   /* robot messages waiting for the I/O thread */
+#define URT__IN_HISTORY 64  /* latched input-register states kept (one per tick with a write) */
 
 /* The I/O thread's command rings into the physics thread, one per kind of client, so that a
  * flood on one (RTDE inputs at 10 kHz) never costs another its commands (a dashboard `power
@@ -97,6 +98,19 @@ struct urt_emulator {
     double out_double[URT_RTDE_NREG];
     uint8_t out_bit[URT_RTDE_NBITREG];
   } out_hist[URT_LOOP_HISTORY];
+  /* the input registers as the controller latched them (under reg_lock): a client's package
+   * applied while tick L was the newest takes effect from tick L + 1, as a controller latches
+   * its inputs once per cycle; the program's slice of tick k and the data package of tick k
+   * both read the entry in force at k, so a late runner thread reads what the tick held, not
+   * what arrived since (urt__inputs_at) */
+  struct urt__in_regs {
+    uint64_t from;               /* first tick this entry holds for (0: unused) */
+    int32_t in_int[URT_RTDE_NREG];
+    double in_double[URT_RTDE_NREG];
+    uint8_t in_bit[URT_RTDE_NBITREG];
+  } in_hist[URT__IN_HISTORY];
+  uint32_t in_newest;            /* index of the newest entry of in_hist */
+  uint64_t in_read_tick;         /* the newest tick whose inputs the program has read */
 
   /* 29999 */
   urt_dashboard_ctx_t dash_ctx;
@@ -145,6 +159,14 @@ typedef struct urt__port_ops {
 } urt__port_ops_t;
 
 extern const urt__port_ops_t urt__port_script_ops, urt__port_rtde_ops, urt__port_dashboard_ops;
+
+/* The input registers latched per tick (input_latch.c), all under reg_lock: latch the bank's
+ * inputs as in force from newest_tick + 1 (or after the newest tick the program has read);
+ * copy into r the inputs in force at tick (_read: the program's read, which fixes that tick's
+ * inputs). */
+void urt__inputs_latch(urt_emulator_t *e, uint64_t newest_tick);
+void urt__inputs_at(const urt_emulator_t *e, uint64_t tick, urt_rtde_registers_t *r);
+void urt__inputs_read(urt_emulator_t *e, uint64_t tick, urt_rtde_registers_t *r);
 
 /* Per tick, in order: RTDE inputs into the controller, then what every port streams. */
 void urt__rtde_apply_inputs(urt_emulator_t *e);

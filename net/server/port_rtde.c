@@ -109,6 +109,7 @@ void urt__rtde_apply_inputs(urt_emulator_t *e) {
   e->rtde_applied_tick = urt_loop_latest_tick(e->loop);
   pthread_mutex_lock(&e->reg_lock);
   urt_rtde_inputs_apply_registers(&all, &e->regs);
+  urt__inputs_latch(e, e->rtde_applied_tick);
   pthread_mutex_unlock(&e->reg_lock);
   if (all.set & URT_RTDE_IN_SPEED_SLIDER) {
     urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_SPEED_SLIDER, .value = all.speed_slider_fraction};
@@ -146,6 +147,7 @@ void urt__rtde_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
     if (!have_regs) {
       pthread_mutex_lock(&e->reg_lock);
       regs = e->regs;
+      urt__inputs_at(e, s->tick, &regs);  // the inputs as this tick held them
       // a running program's outputs as its slice of the previous tick left them: the slice
       // whose commands this tick executed (on a controller both come from one cycle; the
       // program may have run further by the time this thread streams the tick)

@@ -56,10 +56,13 @@ static int host_forward_kinematics(void *ctx, const double q[URT_NJ], double pos
   return 0;
 }
 
-static void host_read_registers(void *ctx, urt_rtde_registers_t *out) {
+static void host_read_registers(void *ctx, uint64_t tick, urt_rtde_registers_t *out) {
   urt_emulator_t *e = ctx;
   pthread_mutex_lock(&e->reg_lock);
   *out = e->regs;
+  if (tick != UINT64_MAX) {
+    urt__inputs_read(e, tick, out);
+  }
   pthread_mutex_unlock(&e->reg_lock);
 }
 

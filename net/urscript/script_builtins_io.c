@@ -117,7 +117,7 @@ static int reg_read(vm *V, const us_node *n, sv *a, sv *out, int kind, bool inpu
   if (!h->read_registers) return urt__us_fail(V, n, "RTDE registers are not available");
   if (reg_index(V, n, a, kind == URT_SCRIPT_REG_BIT ? URT_RTDE_NBITREG : URT_RTDE_NREG, &k) != X_OK) return X_ERR;
   urt_rtde_registers_t r;
-  h->read_registers(h->ctx, &r);
+  h->read_registers(h->ctx, V->tick, &r);  // the inputs as this tick held them
   if (kind == URT_SCRIPT_REG_INT) *out = mk_int(input ? r.in_int[k] : r.out_int[k]);
   else if (kind == URT_SCRIPT_REG_DOUBLE) *out = mk_float(input ? r.in_double[k] : r.out_double[k]);
   else *out = mk_bool((input ? r.in_bit[k] : r.out_bit[k]) != 0);

@@ -23,7 +23,7 @@ int urt__us_service_tick(us_service *sv, const us_hooks *h, us_err *err) {
   // rtde_set_watchdog(…, "stop"): a refresh within 1 / f (one tick of slack)
   if (sv->wd_on && host->read_registers) {
     urt_rtde_registers_t r;
-    host->read_registers(host->ctx, &r);
+    host->read_registers(host->ctx, UINT64_MAX, &r);
     uint32_t n = sv->wd_double ? r.in_double_writes[sv->wd_reg] : r.in_int_writes[sv->wd_reg];
     if (n != sv->wd_count || sv->wd_last < 0) {
       sv->wd_count = n;

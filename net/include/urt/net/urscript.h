@@ -73,9 +73,11 @@ typedef struct urt_script_host {
   /* Nullable: TCP pose (with the active TCP offset) of joint positions q; returns 0. */
   int (*forward_kinematics)(void *ctx, const double q[URT_NJ], double pose[6]);
   /* Nullable: the RTDE register bank (protocols.md §2.5–2.6). read_registers copies all of it
-   * consistently (one client data package is never seen half-applied); write_output_register
-   * sets one output register: kind URT_SCRIPT_REG_INT / _DOUBLE / _BIT. */
-  void (*read_registers)(void *ctx, urt_rtde_registers_t *out);
+   * consistently (one client data package is never seen half-applied), the input registers as
+   * the controller latched them for tick (UINT64_MAX: the newest; the write counts are always
+   * the newest); write_output_register sets one output register: kind URT_SCRIPT_REG_INT /
+   * _DOUBLE / _BIT. */
+  void (*read_registers)(void *ctx, uint64_t tick, urt_rtde_registers_t *out);
   void (*write_output_register)(void *ctx, int kind, int index, double value);
   /* Nullable: the loaded robot model, for native programs' kinematics and dynamics getters. */
   const urt_model_t *(*model)(void *ctx);
