@@ -200,6 +200,8 @@ enum {
                                               qd_max → pstop (C204A0 on 30001)            */
 };
 
+#define URT_SERVOJ_REPLAY 32  /* periods a late servoj can be run from its issuing tick */
+
 typedef struct urt_ctrl {
   double period;              /* controller period [s] (0.002 or 0.008)          */
   int n_sub;                  /* physics steps per period (period / m->dt)       */
@@ -266,6 +268,17 @@ typedef struct urt_ctrl {
    * tick whose period that was (the next speedj inherits the debt when it follows at once) */
   double speedj_owed[URT_NJ], speedj_w[URT_NJ];
   uint64_t speedj_tick;
+
+  /* a servoj stream's last periods (core/motion_servoj.cpp), so that a program's servoj that
+   * reaches the controller late runs from the tick after the one that issued it: each slot, by
+   * tick % URT_SERVOJ_REPLAY, the set-point at the start of that tick and the target it ran to;
+   * and the tick at which servoj's timeout began the stop that runs now (0: none) */
+  struct urt_servoj_replay {
+    uint64_t tick[URT_SERVOJ_REPLAY];
+    double q[URT_SERVOJ_REPLAY][URT_NJ], qd[URT_SERVOJ_REPLAY][URT_NJ];
+    double target[URT_SERVOJ_REPLAY][URT_NJ];
+    uint64_t timeout_tick;
+  } servoj_replay;
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or
