@@ -494,7 +494,13 @@ int urt_emulator_start(urt_emulator_t *e) {
     return URT_OK;
   }
   atomic_store(&e->stop, 0);
-  e->streamed_tick = urt_loop_latest_tick(e->loop);
+  // the ports start after the newest tick, and a safety-mode change is news against its mode
+  // (before tick 1: the controller's first, NORMAL); taken from the first tick streamed
+  // instead, a protective stop in it went unreported (a program's protective_stop() sent at
+  // once, with the I/O thread late to start)
+  urt_snapshot_t s0;
+  e->streamed_tick = urt_loop_read_latest(e->loop, &s0);
+  e->last_safety_mode = e->streamed_tick > 0 ? s0.safety_mode : URT_SAFETY_MODE_NORMAL;
   if (urt_thread_start(&e->io_thread, io_main, e, THREAD_STACK) != 0) {
     return URT_EIO;
   }
