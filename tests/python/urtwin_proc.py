@@ -84,7 +84,9 @@ class Emulator:
         self.proc = subprocess.Popen(self.args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                      cwd=ROOT, preexec_fn=limit)
         try:
-            for port in (30001, 30002, 30003):
+            # every port a test may dial first (the emulator opens them one after another:
+            # ur_rtde dials 30004 first, and found it closed once after 30003 had opened)
+            for port in (30001, 30002, 30003, 30004, 29999):
                 wait_port(self.host, port)
         except TimeoutError:
             self.__exit__(None, None, None)
