@@ -159,11 +159,87 @@ static void test_speedj__a_late_program_stream_ends_where_the_on_time_one_does(v
   assert_true(on_time - unstamped > 10.0 * fabs(on_time - stamped));
 }
 
+/* ---- servoj from a program that ran late ---- */
+
+/* ur_rtde's and URCL's servo stream: one servoj(q, t = T, lookahead 0.03, gain 2000) per
+ * period, a 0.2 rad, 0.5 Hz sine on joint 0, for N periods; late: as in speedj_stream. Writes
+ * joint 0's set-point at the end of each period into q1 (N + 1 values). */
+static void servoj_stream(const int *late, int n_late, int stamped, int N, double *q1) {
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  const double T = r.c->period, q_start = r.c->q1[0];
+  urt_ctrl_cmd_t held[64];
+  int n_held = 0;
+  const uint64_t id = r.next_id++;
+  for (int n = 0; n <= N; n++) {
+    urt_ctrl_cmd_t c;
+    memset(&c, 0, sizeof c);
+    c.kind = URT_CTRL_SERVOJ;
+    c.id = id;
+    memcpy(c.q, r.c->q1, sizeof c.q);
+    c.q[0] = q_start + 0.2 * sin(2 * M_PI * 0.5 * n * T);
+    c.t = T;
+    c.lookahead_time = 0.03;
+    c.gain = 2000;
+    c.tick = stamped ? r.c->tick : 0;
+    int is_late = 0;
+    for (int k = 0; k < n_late; k++) {
+      is_late = is_late || late[k] == n;
+    }
+    if (is_late) {
+      held[n_held++] = c;
+      rig_period(&r, NULL);
+    } else {
+      for (int k = 0; k < n_held; k++) {
+        urt_ctrl_apply(r.m, r.c, r.d, &held[k]);
+      }
+      n_held = 0;
+      rig_period(&r, &c);
+    }
+    q1[n] = r.c->q1[0];
+  }
+  rig_free(&r);
+}
+
+static void test_servoj__a_late_program_stream_is_re_run_from_its_ticks(void **state) {
+  (void)state;
+  enum { N = 600 };
+  static double on_time[N + 1], stamped[N + 1], unstamped[N + 1];
+  servoj_stream(NULL, 0, 1, N, on_time);
+  // one period late; three (servoj's timeout starts a stop after the third); twelve at once
+  int late[32], n_late = 0;
+  late[n_late++] = 100;
+  for (int n = 200; n < 203; n++) late[n_late++] = n;
+  for (int n = 300; n < 312; n++) late[n_late++] = n;
+  servoj_stream(late, n_late, 1, N, stamped);
+  servoj_stream(late, n_late, 0, N, unstamped);
+  double after = 0.0, during = 0.0, plain = 0.0;
+  for (int n = 0; n <= N; n++) {
+    int is_late = 0;
+    for (int k = 0; k < n_late; k++) {
+      is_late = is_late || late[k] == n;
+    }
+    const double e = fabs(stamped[n] - on_time[n]);
+    if (is_late) {
+      during = fmax(during, e);
+    } else {
+      after = fmax(after, e);
+    }
+    plain = fmax(plain, fabs(unstamped[n] - on_time[n]));
+  }
+  print_message("servoj stream, late 1, 3 and 12 periods: set-point off the on-time stream by "
+                "%.2e rad while late, %.2e once the commands arrived (without stamps %.2e)\n",
+                during, after, plain);
+  // once a burst has arrived the set-point is the on-time stream's, to rounding
+  assert_true(after < 1e-12);
+  assert_true(during > 1e-6 && plain > 1e-5);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_optimovej__fractions_of_the_joint_limits_set_the_time),
       cmocka_unit_test(test_optimovej__fractions_outside_0_1_are_refused),
       cmocka_unit_test(test_speedj__a_late_program_stream_ends_where_the_on_time_one_does),
+      cmocka_unit_test(test_servoj__a_late_program_stream_is_re_run_from_its_ticks),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
