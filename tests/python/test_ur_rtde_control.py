@@ -227,11 +227,13 @@ def test_servoj_sine_tracks_with_the_lookahead_lag_then_servo_stop(hogs):
     (2000, 0.03 s), the sine tests/urcl/ros2_driver_pattern's (0.2 rad, 0.2 Hz), also beside two
     busy processes. Judged against the commands as they reached the controller, tick by tick
     (the input register ur_rtde writes them to, read back by a second RTDE client): the arm
-    moves as servoj's law makes of them, within 1 tick and 1e-3 rad — the law follows a ramp
+    moves as servoj's law makes of them, within 2 ticks and 1e-3 rad — the law follows a ramp
     exactly one lookahead late, so the arm follows the command one lookahead late. How often
     and how evenly the client managed to send is the client's and the machine's: a starved
     client's commands arrive as a staircase, and the arm must follow the law's response to that
-    staircase all the same (a CI run's client reached the controller every 3-6 ticks)."""
+    staircase all the same (a CI run's client reached the controller every 3-6 ticks). Measured
+    (-s): arm 6e-5-1.3e-4 rad off the law at 0 ticks, also without --rt-priority beside the
+    hogs (the input latch and the late-servoj replay: net/urscript/README.md)."""
     period, lookahead, gain = 0.002, 0.03, 2000
     amp, freq, seconds = 0.2, 0.2, 5.0
     rt_client = ["chrt", "-f", "50"] if RT_ARGS else []
