@@ -98,6 +98,8 @@ struct urt_emulator {
     double out_double[URT_RTDE_NREG];
     uint8_t out_bit[URT_RTDE_NBITREG];
   } out_hist[URT_LOOP_HISTORY];
+  uint64_t out_done;             /* 1 + the tick of the newest slice kept there (0: none) */
+  bool out_running;              /* a main program runs (its slices are reported) */
   /* the input registers as the controller latched them (under reg_lock): a client's package
    * applied while tick L was the newest takes effect from tick L + 1, as a controller latches
    * its inputs once per cycle; the program's slice of tick k and the data package of tick k

@@ -153,7 +153,14 @@ void urt__rtde_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
       // program may have run further by the time this thread streams the tick)
       // (also for the ticks a late I/O thread streams after the program has ended)
       const struct urt__out_regs *h = &e->out_hist[(s->tick - 1) % URT_LOOP_HISTORY];
-      if (s->tick > 0 && h->slice == s->tick) {
+      bool kept = s->tick > 0 && h->slice == s->tick;
+      if (!kept && e->out_running && e->out_done > 0 && e->out_done < s->tick) {
+        // that slice has not ended yet (the runner is late): the newest slice that has, never
+        // the live bank, which may hold part of the running slice's writes
+        h = &e->out_hist[(e->out_done - 1) % URT_LOOP_HISTORY];
+        kept = true;
+      }
+      if (kept) {
         memcpy(regs.out_int, h->out_int, sizeof regs.out_int);
         memcpy(regs.out_double, h->out_double, sizeof regs.out_double);
         memcpy(regs.out_bit, h->out_bit, sizeof regs.out_bit);

@@ -90,12 +90,14 @@ static int host_snapshot_at(void *ctx, uint64_t tick, urt_snapshot_t *out) {
 // (0 of 6 without the wait), so a late runner's commands still reach a later tick.
 static void host_tick_done(void *ctx, uint64_t tick, bool running) {
   urt_emulator_t *e = ctx;
+  pthread_mutex_lock(&e->reg_lock);
+  e->out_running = running;
   if (!running) {
+    pthread_mutex_unlock(&e->reg_lock);
     return;
   }
-  pthread_mutex_lock(&e->reg_lock);
   struct urt__out_regs *h = &e->out_hist[tick % URT_LOOP_HISTORY];
-  h->slice = tick + 1;
+  e->out_done = h->slice = tick + 1;
   memcpy(h->out_int, e->regs.out_int, sizeof h->out_int);
   memcpy(h->out_double, e->regs.out_double, sizeof h->out_double);
   memcpy(h->out_bit, e->regs.out_bit, sizeof h->out_bit);
