@@ -163,8 +163,9 @@ static void test_speedj__a_late_program_stream_ends_where_the_on_time_one_does(v
 
 /* ur_rtde's and URCL's servo stream: one servoj(q, t = T, lookahead 0.03, gain 2000) per
  * period, a 0.2 rad, 0.5 Hz sine on joint 0, for N periods; late: as in speedj_stream. Writes
- * joint 0's set-point at the end of each period into q1 (N + 1 values). */
-static void servoj_stream(const int *late, int n_late, int stamped, int N, double *q1) {
+ * joint 0's set-point at the end of each period into q1 and its speed into qd1 (N + 1 values). */
+static void servoj_stream(const int *late, int n_late, int stamped, int N, double *q1,
+                          double *qd1) {
   rig_t r = rig_new(urt_test_quiet, 0.002, 1);
   const double T = r.c->period, q_start = r.c->q1[0];
   urt_ctrl_cmd_t held[64];
@@ -196,6 +197,7 @@ static void servoj_stream(const int *late, int n_late, int stamped, int N, doubl
       rig_period(&r, &c);
     }
     q1[n] = r.c->q1[0];
+    qd1[n] = r.c->qd1[0];
   }
   rig_free(&r);
 }
@@ -203,16 +205,17 @@ static void servoj_stream(const int *late, int n_late, int stamped, int N, doubl
 static void test_servoj__a_late_program_stream_is_re_run_from_its_ticks(void **state) {
   (void)state;
   enum { N = 600 };
-  static double on_time[N + 1], stamped[N + 1], unstamped[N + 1];
-  servoj_stream(NULL, 0, 1, N, on_time);
+  static double on_time[N + 1], stamped[N + 1], unstamped[N + 1], qd_on[N + 1], qd_late[N + 1],
+      qd_plain[N + 1];
+  servoj_stream(NULL, 0, 1, N, on_time, qd_on);
   // one period late; three (servoj's timeout starts a stop after the third); twelve at once
   int late[32], n_late = 0;
   late[n_late++] = 100;
   for (int n = 200; n < 203; n++) late[n_late++] = n;
   for (int n = 300; n < 312; n++) late[n_late++] = n;
-  servoj_stream(late, n_late, 1, N, stamped);
-  servoj_stream(late, n_late, 0, N, unstamped);
-  double after = 0.0, during = 0.0, plain = 0.0;
+  servoj_stream(late, n_late, 1, N, stamped, qd_late);
+  servoj_stream(late, n_late, 0, N, unstamped, qd_plain);
+  double after = 0.0, during = 0.0, plain = 0.0, step = 0.0;
   for (int n = 0; n <= N; n++) {
     int is_late = 0;
     for (int k = 0; k < n_late; k++) {
@@ -223,15 +226,55 @@ static void test_servoj__a_late_program_stream_is_re_run_from_its_ticks(void **s
       during = fmax(during, e);
     } else {
       after = fmax(after, e);
+      if (n > 0) {
+        // the speed step a burst's replay makes, beyond the on-time stream's own change
+        step = fmax(step, fabs((qd_late[n] - qd_late[n - 1]) - (qd_on[n] - qd_on[n - 1])));
+      }
     }
     plain = fmax(plain, fabs(unstamped[n] - on_time[n]));
   }
   print_message("servoj stream, late 1, 3 and 12 periods: set-point off the on-time stream by "
-                "%.2e rad while late, %.2e once the commands arrived (without stamps %.2e)\n",
-                during, after, plain);
+                "%.2e rad while late, %.2e once the commands arrived (without stamps %.2e); "
+                "speed step of a replay %.2e rad/s\n",
+                during, after, plain, step);
   // once a burst has arrived the set-point is the on-time stream's, to rounding
   assert_true(after < 1e-12);
+  // within one period of the law's largest acceleration (else it is not replayed)
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  assert_true(step <= 0.9 * r.m->joint[0].qdd_max * r.c->period + 1e-12);
+  rig_free(&r);
   assert_true(during > 1e-6 && plain > 1e-5);
+}
+
+static void test_servoj__a_late_jump_is_not_re_run(void **state) {
+  (void)state;
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  const uint64_t id = r.next_id++;
+  urt_ctrl_cmd_t c;
+  memset(&c, 0, sizeof c);
+  c.kind = URT_CTRL_SERVOJ;
+  c.id = id;
+  memcpy(c.q, r.c->q1, sizeof c.q);
+  c.t = r.c->period;
+  c.lookahead_time = 0.03;
+  c.gain = 2000;
+  for (int n = 0; n < 10; n++) {  // a stream holding still
+    c.tick = r.c->tick;
+    rig_period(&r, &c);
+  }
+  // URCL's target_outside_limits_servoj: 2.5 rad on the wrist, here issued 2 periods ago (the
+  // stream still runs: its timeout would stop it after 3)
+  c.tick = r.c->tick;
+  c.q[5] -= 2.5;
+  for (int n = 0; n < 2; n++) {
+    rig_period(&r, NULL);
+  }
+  rig_period(&r, &c);
+  const double bound = 0.9 * r.m->joint[5].qdd_max * r.c->period;
+  print_message("servoj 2.5 rad jump, 2 periods late: set-point speed %.4f rad/s after its first "
+                "period (one period of the largest acceleration: %.4f)\n", r.c->qd1[5], bound);
+  assert_true(fabs(r.c->qd1[5]) <= bound + 1e-12);
+  rig_free(&r);
 }
 
 int main(void) {
@@ -240,6 +283,7 @@ int main(void) {
       cmocka_unit_test(test_optimovej__fractions_outside_0_1_are_refused),
       cmocka_unit_test(test_speedj__a_late_program_stream_ends_where_the_on_time_one_does),
       cmocka_unit_test(test_servoj__a_late_program_stream_is_re_run_from_its_ticks),
+      cmocka_unit_test(test_servoj__a_late_jump_is_not_re_run),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
