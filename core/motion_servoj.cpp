@@ -12,7 +12,7 @@
 // load (no --rt-priority, two busy processes) a ur_rtde servoJ sine left the law's response to
 // the commands by up to 8.6e-4 rad, and URCL's servo stream the same. On a controller the
 // program runs every period. So the last URT_SERVOJ_REPLAY periods of the stream are kept (the
-// set-point at each one's start and its target), and a servoj stamped s < the last tick L
+// set-point at each one's start), and a servoj stamped s < the last tick L
 // re-runs periods s+1 … L toward its target, from the set-point at the start of s+1, rewriting
 // them (the next command of the burst re-runs from its own tick on that): the set-point then
 // jumps to where the stream would be had the program been on time (a few 1e-5 rad per late
@@ -74,7 +74,6 @@ void replay(const urt_model_t* m, urt_ctrl_t* c, const urt_ctrl_cmd_t& cmd, urt_
         r.tick[k] = t;
         std::memcpy(r.q[k], q, sizeof q);
         std::memcpy(r.qd[k], v, sizeof v);
-        std::memcpy(r.target[k], target, sizeof r.target[k]);
       }
       std::memcpy(v_before, v, sizeof v);
       period(m, c, target, q, v);
@@ -130,7 +129,6 @@ uint32_t tick(const MotionEnv& e) {
   r.tick[k] = c->tick;
   std::memcpy(r.q[k], c->q0, sizeof r.q[k]);
   std::memcpy(r.qd[k], c->qd0, sizeof r.qd[k]);
-  std::memcpy(r.target[k], sv.target, sizeof r.target[k]);
   std::memcpy(c->q1, c->q0, sizeof c->q1);
   std::memcpy(c->qd1, c->qd0, sizeof c->qd1);
   period(e.m, c, sv.target, c->q1, c->qd1);

@@ -271,12 +271,12 @@ typedef struct urt_ctrl {
 
   /* a servoj stream's last periods (core/motion_servoj.cpp), so that a program's servoj that
    * reaches the controller late runs from the tick after the one that issued it: each slot, by
-   * tick % URT_SERVOJ_REPLAY, the set-point at the start of that tick and the target it ran to;
-   * and the tick at which servoj's timeout began the stop that runs now (0: none) */
+   * tick % URT_SERVOJ_REPLAY, the set-point at the start of that tick (a re-run goes toward the
+   * late command's target); and the tick at which servoj's timeout began the stop that runs now
+   * (0: none) */
   struct urt_servoj_replay {
     uint64_t tick[URT_SERVOJ_REPLAY];
     double q[URT_SERVOJ_REPLAY][URT_NJ], qd[URT_SERVOJ_REPLAY][URT_NJ];
-    double target[URT_SERVOJ_REPLAY][URT_NJ];
     uint64_t timeout_tick;
   } servoj_replay;
 } urt_ctrl_t;
