@@ -28,6 +28,14 @@
 // the commanded acceleration; the next on-time speedj of the stream inherits the debt; reaching
 // a goal clears it). The position lost while the program was late (about L²·a·T² per event) is
 // not made up. On time nothing changes.
+//
+// A goal faster than a joint can turn is not a protective stop: the trajectory limiter scales
+// the whole goal down (every joint by the same fraction, so the direction holds) until the
+// fastest joint, relative to its limit, runs at qd_max; RTDE's speed_scaling ("speed scaling
+// of the trajectory limiter") reports that fraction while it holds. URCL's spline execution
+// relies on it: its zero_time_trajectory tests send a 1 s cubic segment whose peak speed is
+// 1.5 times its mean, above 180°/s on the elbow from the home pose, and expect it to run to
+// SUCCESS (the next segment starts from the set-point the limiter left, so the end is exact).
 #include "motion.hpp"
 
 namespace urt::core {
@@ -39,7 +47,22 @@ bool bad_argument(const urt_ctrl_cmd_t& cmd) {
 }
 
 uint32_t bad_target(const urt_model_t* m, const urt_ctrl_cmd_t& cmd) {
-  return speed_faults(m, cmd.q);
+  (void)m;
+  for (int j = 0; j < URT_NJ; j++) {
+    if (!std::isfinite(cmd.q[j])) {
+      return URT_PSTOP_NONFINITE_CMD;
+    }
+  }
+  return 0;
+}
+
+// the fraction of the commanded speeds the joints' limits allow (1: within them)
+double limiter_fraction(const urt_model_t* m, const double* qd) {
+  double worst = 1.0;
+  for (int j = 0; j < URT_NJ; j++) {
+    worst = std::fmax(worst, std::fabs(qd[j]) / m->joint[j].qd_max);
+  }
+  return 1.0 / worst;
 }
 
 void start(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const MotionStart& st) {
@@ -56,16 +79,20 @@ void start(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const MotionStart& st)
   const bool last_w = c->speedj_tick != 0 && c->tick - c->speedj_tick <= (uint64_t)late;
   // the stream goes on at once (the previous period ran a speedj, whose t has just run out)
   const bool follows = c->speedj_tick != 0 && c->speedj_tick == c->tick;
+  sj.limit = limiter_fraction(e.m, cmd.q);
   double dmax = 0.0;
   for (int j = 0; j < URT_NJ; j++) {
     // a stopped scale (0) leaves nothing to divide by: a speedj continues its own speed
     sj.qd_s[j] = s > 0.0 ? c->qd1[j] / s : (was_speedj ? sj.qd_s[j] : 0.0);
-    sj.qd_goal[j] = cmd.q[j];
-    dmax = std::fmax(dmax, std::fabs(cmd.q[j] - sj.qd_s[j]));
+    // (scaled, the fastest joint's goal could round to a hair above its limit)
+    const double qd_max = e.m->joint[j].qd_max;
+    sj.qd_goal[j] = sj.limit < 1.0 ? std::fmax(-qd_max, std::fmin(qd_max, cmd.q[j] * sj.limit))
+                                   : cmd.q[j];
+    dmax = std::fmax(dmax, std::fabs(sj.qd_goal[j] - sj.qd_s[j]));
   }
   double tr = dmax / cmd.a;
   for (int j = 0; j < URT_NJ; j++) {
-    const double gap = std::fabs(cmd.q[j] - sj.qd_s[j]);
+    const double gap = std::fabs(sj.qd_goal[j] - sj.qd_s[j]);
     sj.a[j] = tr > 0.0 ? gap / tr : 0.0;
     const double ramp = sj.a[j] * s * c->period;
     if (late > 0.0) {

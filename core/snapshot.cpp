@@ -19,8 +19,8 @@
 // - v_robot: the 48 V supply; i_robot = Σ V_j i_j / v_robot (power balance of the drives,
 //   regeneration included); v_main: the same bus.
 // - program_state: the runner's, shown as PAUSED while the controller is paused over PLAYING;
-//   speed_scaling: the slider's scaling times the pause's; control_mode (RTDE): 0 position,
-//   1 teach (freedrive), 2 force, 3 torque; m_target of a torque-controlled joint: its command.
+//   speed_scaling: the slider's scaling times the pause's (and the speedj limiter's);
+//   control_mode (RTDE): 0 position, 1 teach (freedrive), 2 force, 3 torque; m_target of a torque-controlled joint: its command.
 // - digital_in, analog_in, tool_analog_in: the levels set from outside (URT_CTRL_SET_INPUTS:
 //   LCM, urtwin --io), all in voltage mode, as the primary interface reports. Loop diagnostics (exec_time, overruns, …) are zero
 //   here: the loop writes them after this call.
@@ -266,7 +266,9 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   s->pstop = d->pstop;
   s->ctrl_fault = c->fault;
   s->speed_slider = c->speed_slider;
-  s->speed_scaling = c->speed_scaling * c->pause_scale;
+  // the slider's and the pause's scaling, and the trajectory limiter's while a speedj needs it
+  s->speed_scaling = c->speed_scaling * c->pause_scale *
+                     (c->motion == URT_MOTION_SPEEDJ ? c->motion_state.speedj.limit : 1.0);
   s->motion = c->motion;
   s->motion_id = c->motion_id;
   s->motion_done_id = c->motion_done_id;

@@ -12,6 +12,7 @@
 #include "test_support.h"
 #include "urt/controller.h"
 #include "urt/core.h"
+#include "urt/snapshot.h"
 
 static urt_ctrl_cmd_t cmd_of(rig_t *r, int kind) {
   urt_ctrl_cmd_t c;
@@ -277,11 +278,85 @@ static void test_servoj__a_late_jump_is_not_re_run(void **state) {
   rig_free(&r);
 }
 
+/* ---- speedj's trajectory limiter ---- */
+
+/* a goal beyond the joints' speed limits runs at the limit, in the commanded direction, with
+ * the fraction reported as speed_scaling: no protective stop (URCL's zero_time spline tests
+ * send such a segment and expect SUCCESS) */
+static void test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them(void **state) {
+  (void)state;
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  const double qd[URT_NJ] = {2.4, -0.2, -5.6, 1.2, 4.8, -0.75};
+  // the elbow is the furthest over its limit: every joint gets its fraction
+  double f = 1.0;
+  for (int j = 0; j < URT_NJ; j++) {
+    f = fmin(f, r.m->joint[j].qd_max / fabs(qd[j]));
+  }
+  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SPEEDJ);
+  memcpy(c.q, qd, sizeof c.q);
+  c.a = 40.0;
+  c.t = 0.3;
+  rig_period(&r, &c);
+  double vmax_ratio = 0.0, off = 0.0;
+  for (int k = 0; k < 100; k++) {  // 0.2 s: past the ramp (5.6 · f / 40 ≈ 79 ms), inside t
+    rig_period(&r, NULL);
+    for (int j = 0; j < URT_NJ; j++) {
+      vmax_ratio = fmax(vmax_ratio, fabs(r.c->qd1[j]) / r.m->joint[j].qd_max);
+    }
+  }
+  for (int j = 0; j < URT_NJ; j++) {
+    off = fmax(off, fabs(r.c->qd1[j] - f * qd[j]));
+  }
+  urt_snapshot_t s;
+  urt_snapshot_fill(r.m, r.c, r.d, &s);
+  print_message("speedj 5.6 rad/s on the elbow: limiter fraction %.6f, speeds off the scaled goal "
+                "%.2e rad/s, fastest joint at %.6f of its limit, speed_scaling %.6f, pstop 0x%x\n",
+                f, off, vmax_ratio, s.speed_scaling, (unsigned)r.d->pstop);
+  assert_int_equal(r.d->pstop, 0);
+  assert_int_equal(r.c->motion, URT_MOTION_SPEEDJ);
+  assert_true(off < 1e-12);
+  assert_true(vmax_ratio <= 1.0);
+  assert_near(s.speed_scaling, f, 1e-12);
+  // URCL's spline as it runs: one speedj(qd, |Δqd|/T, T) per period, the elbow's speed rising
+  // past its limit (a 3.746 rad cubic segment of 1 s); a scaled goal must never round above the
+  // limit (one did, at 3.40 rad/s: a protective stop, speed limit); from rest, on a new rig
+  rig_free(&r);
+  r = rig_new(urt_test_quiet, 0.002, 1);
+  double prev = 0.0;
+  int stopped_at = -1;
+  for (int k = 1; k < 250 && stopped_at < 0; k++) {
+    const double tau = k * r.c->period, v = -6.0 * 3.746 * (tau - tau * tau);
+    urt_ctrl_cmd_t st = cmd_of(&r, URT_CTRL_SPEEDJ);
+    st.q[2] = v;
+    st.a = fmax(fabs(v - prev) / r.c->period, 1e-9);
+    st.t = r.c->period;
+    prev = v;
+    rig_period(&r, &st);
+    if (r.d->pstop) {
+      stopped_at = k;
+    }
+  }
+  print_message("spline-like stream up to 5.6 rad/s on the elbow: pstop after %d periods (-1: none), "
+                "elbow at %.9f rad/s\n", stopped_at, r.c->qd1[2]);
+  assert_int_equal(stopped_at, -1);
+  assert_true(fabs(r.c->qd1[2]) <= r.m->joint[2].qd_max);
+  // within the limits nothing is scaled and speed_scaling is the slider's again
+  urt_ctrl_cmd_t slow = cmd_of(&r, URT_CTRL_SPEEDJ);
+  slow.q[0] = 0.3;
+  slow.a = 40.0;
+  slow.t = 0.1;
+  rig_period(&r, &slow);
+  urt_snapshot_fill(r.m, r.c, r.d, &s);
+  assert_near(s.speed_scaling, 1.0, 0.0);
+  rig_free(&r);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_optimovej__fractions_of_the_joint_limits_set_the_time),
       cmocka_unit_test(test_optimovej__fractions_outside_0_1_are_refused),
       cmocka_unit_test(test_speedj__a_late_program_stream_ends_where_the_on_time_one_does),
+      cmocka_unit_test(test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them),
       cmocka_unit_test(test_servoj__a_late_program_stream_is_re_run_from_its_ticks),
       cmocka_unit_test(test_servoj__a_late_jump_is_not_re_run),
   };

@@ -39,6 +39,7 @@ typedef struct urt_speedj_state {
   double tau;                    /* motion time since the start [s]: scale per second       */
   double late;                   /* periods this speedj came late (or the one it superseded)  */
   double fresh;                  /* 1 until its first period: superseded then, it never ramped */
+  double limit;                  /* the trajectory limiter's fraction of the commanded speed  */
 } urt_speedj_state_t;
 
 typedef struct urt_speedl_state {
