@@ -206,6 +206,17 @@ void apply_motion(const MotionEnv& e, const Motion& type, const urt_ctrl_cmd_t* 
   double qg[URT_NJ];
   if (type.pose_target) {
     if (urt_ctrl_inverse_kinematics_tcp(m, c->tcp_offset, cmd->pose, c->q1, qg) != URT_OK) {
+      // a tool-space line (movel, movep) is planned in Cartesian space, and one whose target
+      // the arm cannot reach leaves the workspace: a protective stop, as the line leaving it
+      // midway is (motion_movel.cpp). URCL's unfeasible_movel_target test sends a movel to
+      // x = -10.2 m and waits for RobotModeData's protective stop (URSim gives it), then
+      // unlocks. urtwin stops at once, where the arm is; whether a real controller first runs
+      // the line to the workspace's edge is unchecked. Other pose commands are refused.
+      if (kind == URT_CTRL_MOVEL || kind == URT_CTRL_MOVEP) {
+        mark_done(c, cmd->id);
+        protective_stop(c, d, URT_CTRL_FAULT_IK, URT_PSTOP_POS_LIMIT);
+        return;
+      }
       refuse(c, cmd, URT_CTRL_FAULT_IK);
       return;
     }

@@ -4,6 +4,13 @@
 // from the last set-point; a pure rotation takes a, v in rad/s², rad/s. Its time is the path
 // time c->traj_time (speed slider, pause). Arriving while the set-point moves, it first stops
 // (c->pending). A line that leaves the workspace is a protective stop. Context: RT.
+//
+// The trajectory limiter: a line whose a and v (or t) would turn a joint faster than the
+// planner's margins on qd_max and qdd_max is slowed down to them, as a real controller's speed
+// scaling slows it ("Unfeasible time constraints should simply result in speed scaling slowing
+// down the robot": URCL's unfeasible_times_succeeds, a movel of t = 0.1 s that must succeed).
+// The joints' rates per metre of path are sampled along the line at plan time; a line within
+// them keeps the plan bit for bit.
 #include <Eigen/Geometry>
 
 #include "motion.hpp"
@@ -12,9 +19,65 @@ namespace urt::core {
 
 namespace {
 
+constexpr int kLimiterSamples = 24;  // points on the line where the joints' rates are sampled
+
 bool bad_argument(const urt_ctrl_cmd_t& cmd) {
   return !(cmd.a > 0.0) || !(cmd.v > 0.0) || !std::isfinite(cmd.a) || !std::isfinite(cmd.v) ||
          !std::isfinite(cmd.t) || cmd.t < 0.0;
+}
+
+// the TCP pose at fraction u of the line (position, then rotation vector)
+void line_pose(const urt_movel_state_t& ml, double u, double pose[6]) {
+  Vec3 axis(ml.axis[0], ml.axis[1], ml.axis[2]);
+  Mat3 R0 = rotation_from_rotvec(Vec3(ml.r_start[0], ml.r_start[1], ml.r_start[2]));
+  Mat3 R = R0 * rotation_from_rotvec(axis * (ml.theta * u));
+  Vec3 r = rotvec_from_rotation(R);
+  for (int i = 0; i < 3; i++) {
+    pose[i] = ml.p_start[i] + ml.dp[i] * u;
+    pose[3 + i] = r[i];
+  }
+}
+
+// the TCP twist per unit of path length (D: the translation, or the angle of a pure rotation)
+Vec6 unit_twist(const urt_movel_state_t& ml, double D) {
+  Vec3 axis(ml.axis[0], ml.axis[1], ml.axis[2]);
+  Mat3 R0 = rotation_from_rotvec(Vec3(ml.r_start[0], ml.r_start[1], ml.r_start[2]));
+  Vec6 x;
+  x << ml.dp[0] / D, ml.dp[1] / D, ml.dp[2] / D, R0 * axis * (ml.theta / D);
+  return x;
+}
+
+// the largest path speed and acceleration whose joint rates stay within the planner's margins
+// at every sampled point of the line (up to the first the arm cannot reach: the tick stops there)
+void joint_rate_limits(const MotionEnv& e, const urt_movel_state_t& ml, double D, double& v_lim,
+                       double& a_lim) {
+  const urt_model_t* m = e.m;
+  const urt_ctrl_t* c = e.c;
+  const Vec6 unit = unit_twist(ml, D);
+  double q[URT_NJ], qnear[URT_NJ];
+  std::memcpy(q, c->q1, sizeof q);
+  for (int k = 0; k <= kLimiterSamples; k++) {
+    if (k > 0) {
+      double pose[6];
+      line_pose(ml, (double)k / kLimiterSamples, pose);
+      std::memcpy(qnear, q, sizeof qnear);
+      if (urt_ctrl_inverse_kinematics_tcp(m, c->tcp_offset, pose, qnear, q) != URT_OK) {
+        return;
+      }
+    }
+    Mat3 R;
+    Vec3 p;
+    Mat6 J;
+    tcp_kinematics(m->arm, c->tcp_offset, vec6(q), R, p, &J);
+    const Vec6 rate = dls_solve(J, unit, 0.0);  // joint rates per unit of path
+    for (int j = 0; j < URT_NJ; j++) {
+      const double g = std::fabs(rate[j]);
+      if (g > 0.0 && std::isfinite(g)) {
+        v_lim = std::fmin(v_lim, kSpeedMargin * m->joint[j].qd_max / g);
+        a_lim = std::fmin(a_lim, kAccMargin * m->joint[j].qdd_max / g);
+      }
+    }
+  }
 }
 
 void plan(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
@@ -42,6 +105,15 @@ void plan(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
   // path length: the translation, or for a pure rotation the angle (a, v then in rad/s², rad/s)
   double D = dp.norm() > 1e-7 ? dp.norm() : ml.theta;
   ml.tr = trap_plan(D, cmd.v, cmd.a, cmd.t);
+  double v_lim = HUGE_VAL, a_lim = HUGE_VAL;
+  if (D > 0.0) {
+    joint_rate_limits(e, ml, D, v_lim, a_lim);
+  }
+  if (ml.tr.vp > v_lim || ml.tr.ap > a_lim) {
+    // too fast for the joints: t cannot be kept, and a and v are capped at what they allow
+    // (as movej does with a t beyond the limits)
+    ml.tr = trap_plan(D, std::fmin(cmd.v, v_lim), std::fmin(cmd.a, a_lim), 0.0);
+  }
   c->motion = URT_MOTION_MOVEL;
   c->traj_time = 0.0;
   c->seg_time = 0.0;
@@ -70,11 +142,8 @@ uint32_t tick(const MotionEnv& e) {
          ud = ml.tr.D > 0.0 ? sd * e.scale / ml.tr.D : 0.0;
   Vec3 axis(ml.axis[0], ml.axis[1], ml.axis[2]);
   Mat3 R0 = rotation_from_rotvec(Vec3(ml.r_start[0], ml.r_start[1], ml.r_start[2]));
-  Mat3 R = R0 * rotation_from_rotvec(axis * (ml.theta * u));
-  Vec3 pos(ml.p_start[0] + ml.dp[0] * u, ml.p_start[1] + ml.dp[1] * u,
-           ml.p_start[2] + ml.dp[2] * u);
-  Vec3 r = rotvec_from_rotation(R);
-  double pose[6] = {pos[0], pos[1], pos[2], r[0], r[1], r[2]};
+  double pose[6];
+  line_pose(ml, u, pose);
   double q[URT_NJ];
   if (urt_ctrl_inverse_kinematics_tcp(m, c->tcp_offset, pose, c->q1, q) != URT_OK) {
     return URT_CTRL_FAULT_IK;  // the line left the workspace

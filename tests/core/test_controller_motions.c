@@ -351,6 +351,58 @@ static void test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them(void **
   rig_free(&r);
 }
 
+/* ---- movel's trajectory limiter ---- */
+
+/* a movel whose t asks more of the joints than they can give is slowed down to them and ends
+ * at its target (URCL's unfeasible_times_succeeds: moveL with t = 0.1 s must succeed), where
+ * before the set-point ran past qd_max and stopped the arm */
+static void test_movel__a_t_too_short_for_the_joints_is_slowed_down_to_them(void **state) {
+  (void)state;
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  const double zero_tcp[6] = {0};
+  double p0[6], p1[6];
+  urt_ctrl_forward_kinematics_tcp(r.m, zero_tcp, r.c->q1, p0);
+  memcpy(p1, p0, sizeof p1);
+  p1[0] += 0.3;  // 30 cm in 0.1 s: 4.5 m/s peak on a triangle
+  p1[2] -= 0.1;
+  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_MOVEL);
+  memcpy(c.pose, p1, sizeof c.pose);
+  c.a = 1.4;
+  c.v = 1.04;
+  c.t = 0.1;
+  double peak = 0.0;
+  const double t = time_to_done(&r, &c, 5.0);
+  // time_to_done ran the motion; the peak is read from a second, identical move back and forth
+  double pe[6];
+  urt_ctrl_forward_kinematics_tcp(r.m, zero_tcp, r.c->q1, pe);
+  double off = 0.0;
+  for (int i = 0; i < 3; i++) {
+    off = fmax(off, fabs(pe[i] - p1[i]));
+  }
+  urt_ctrl_cmd_t back = cmd_of(&r, URT_CTRL_MOVEL);
+  memcpy(back.pose, p0, sizeof back.pose);
+  back.a = 1.4;
+  back.v = 1.04;
+  back.t = 0.1;
+  rig_period(&r, &back);
+  double t_back = r.c->period;
+  while (r.c->motion_done_id < back.id && t_back < 5.0) {
+    for (int j = 0; j < URT_NJ; j++) {
+      peak = fmax(peak, fabs(r.c->qd1[j]) / r.m->joint[j].qd_max);
+    }
+    rig_period(&r, NULL);
+    t_back += r.c->period;
+  }
+  print_message("movel 0.32 m with t = 0.1 s: done after %.3f s (back %.3f s), end off %.2e m, "
+                "fastest joint at %.3f of qd_max, pstop 0x%x\n",
+                t, t_back, off, peak, (unsigned)r.d->pstop);
+  assert_int_equal(r.d->pstop, 0);
+  assert_true(t > 0.1 && t < 5.0);
+  assert_true(off < 1e-6);
+  assert_true(peak <= 1.0);
+  rig_free(&r);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_optimovej__fractions_of_the_joint_limits_set_the_time),
@@ -359,6 +411,7 @@ int main(void) {
       cmocka_unit_test(test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them),
       cmocka_unit_test(test_servoj__a_late_program_stream_is_re_run_from_its_ticks),
       cmocka_unit_test(test_servoj__a_late_jump_is_not_re_run),
+      cmocka_unit_test(test_movel__a_t_too_short_for_the_joints_is_slowed_down_to_them),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
