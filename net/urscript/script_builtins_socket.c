@@ -10,6 +10,15 @@
  * results. A timeout ≤ 0 waits for ever, as UR documents. A timeout, a peer that closed with
  * too little data buffered, or an invalid reply give UR's failure values ([0, -1, …],
  * [0, nan, …], "", 0); a partial record stays queued for the next read.
+ *
+ * socket_open is a blocking call too: its thread resumes, and learns the connection's outcome,
+ * at the earliest in the next controller cycle, never in the cycle that asked, even when a
+ * loopback connect completes at once. Before, URCL's program opened its three sockets
+ * (trajectory, script command, reverse) within microseconds of one cycle, and URCL's servers,
+ * a thread each, could see the reverse connection (and let the test send) before the
+ * trajectory server had accepted its own: the point was never written and the program's read
+ * timed out ("Receiving trajectory point failed!", a moveJ returning false at a test's start),
+ * the same race as set_tcp_offset's first command on the script-command socket.
  */
 #include <math.h>
 #include <stdio.h>
@@ -475,6 +484,7 @@ static int b_socket_open(vm *V, const us_node *n, sv *a, sv *out) {
   if (rc != US_SOCK_OK) return X_OK;  // refused, unreachable, unresolvable: False, as UR
   uint64_t limit = timeout_ticks(V, timeout), start = V->tick;
   for (;;) {
+    if (urt__us_wait_tick(V, n) != X_OK) return X_ERR;  // the call's own cycle ends first
     s = urt__us_sock_find(t, name);
     int st = s ? urt__us_sock_poll_connect(s) : -1;
     if (st != 0) {
@@ -485,7 +495,6 @@ static int b_socket_open(vm *V, const us_node *n, sv *a, sv *out) {
       urt__us_sock_close(s);
       return X_OK;
     }
-    if (urt__us_wait_tick(V, n) != X_OK) return X_ERR;
   }
 }
 

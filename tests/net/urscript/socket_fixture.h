@@ -46,7 +46,9 @@ typedef struct fixture {
 static inline int fix_listen(fixture *x) {
   memset(x, 0, sizeof *x);
   x->conn_fd = -1;
-  x->listen_fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  // non-blocking: a tick without a connection to accept (a refused socket_open waits a tick
+  // before it learns the outcome) must not block the program's thread
+  x->listen_fd = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   int one = 1;
   setsockopt(x->listen_fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
   struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};

@@ -95,13 +95,14 @@ static void test_socket__binary_integers_in_parts_over_ticks(void **state) {
 }
 
 static void test_socket__timeout_counts_ticks_and_keeps_a_partial_record(void **state) {
-  // 2 of 4 bytes come: the read times out after 0.1 s = 50 ticks; the rest completes the next
+  // 2 of 4 bytes come: the read (from tick 1, socket_open's cycle over) times out after
+  // 0.1 s = 50 ticks; the rest completes the next
   fix_at(&X, 5, "\x00\x00", 2);
   fix_at(&X, 100, "\x00\x07", 2);
   must_run("socket_open(\"127.0.0.1\", %d, \"s\")\n"
            "textmsg(socket_read_binary_integer(1, \"s\", 0.1))\n"
            "textmsg(socket_read_binary_integer(1, \"s\", 0))\n");
-  assert_msg(0, "[0,-1]", 50);
+  assert_msg(0, "[0,-1]", 51);
   assert_msg(1, "[1,7]", 100);  // timeout 0: waits for ever (until the data comes)
 }
 
@@ -197,7 +198,7 @@ static void test_socket__sends_reach_the_peer(void **state) {
   static const char want[] = "\xff\xff\xff\xfe\nabcd\np[1,0,0,0,0,0.5]SET POS 7\n";
   assert_int_equal(X.n_got, sizeof want - 1);
   assert_memory_equal(X.got, want, sizeof want - 1);
-  assert_msg(0, "False", 0);  // a socket that is not open: False
+  assert_msg(0, "False", 1);  // a socket that is not open: False (after socket_open's tick)
 }
 
 static void test_socket__get_var_round_trip(void **state) {
@@ -219,6 +220,16 @@ static void test_socket__sends_have_nodelay(void **state) {
   assert_true(fd >= 0);
   assert_int_equal(getsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, &len), 0);
   assert_true(on != 0);
+}
+
+/* socket_open blocks its thread into the next cycle even when the loopback connect completes
+ * at once (URCL's servers, a thread each, must accept the trajectory socket before the
+ * program's reverse connection, opened after it, lets the client send) */
+static void test_socket__open_takes_a_cycle_even_on_loopback(void **state) {
+  must_run("textmsg(\"start\")\n"
+           "textmsg(socket_open(\"127.0.0.1\", %d, \"a\"))\n");
+  assert_msg(0, "start", 0);
+  assert_msg(1, "True", 1);
 }
 
 static void test_socket__open_refused_port_is_false(void **state) {
@@ -246,7 +257,7 @@ static void test_socket__reopen_and_close(void **state) {
            "socket_close(\"s\")\n"
            "textmsg(socket_send_int(1, \"s\"))\n"
            "socket_close(\"never_opened\")\n");
-  assert_msg(0, "False", 0);
+  assert_msg(0, "False", 1);
 }
 
 /* the peer of close_all_wait: reads until EOF, waits 50 ms (a busy server), marks, closes */
@@ -403,6 +414,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_socket__sends_reach_the_peer, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__get_var_round_trip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__sends_have_nodelay, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__open_takes_a_cycle_even_on_loopback, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__open_refused_port_is_false, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__open_non_loopback_host_is_a_runtime_error, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__reopen_and_close, setup, teardown),
