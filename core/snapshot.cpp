@@ -267,6 +267,7 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   s->ctrl_fault = c->fault;
   s->speed_slider = c->speed_slider;
   // the slider's and the pause's scaling, and the trajectory limiter's while a speedj needs it
+  s->motion_rate = c->speed_scaling * c->pause_scale;
   s->speed_scaling = c->speed_scaling * c->pause_scale *
                      (c->motion == URT_MOTION_SPEEDJ ? c->motion_state.speedj.limit : 1.0);
   s->motion = c->motion;

@@ -65,6 +65,7 @@ static void run_case(const char *name, const char *text, int ticks, bool last) {
   bench_host h = {0};
   h.s.period = 0.002;
   h.s.speed_scaling = 1.0;
+  h.s.motion_rate = 1.0;
   h.s.safety_mode = URT_SAFETY_MODE_NORMAL;
   h.s.robot_mode = URT_ROBOT_MODE_RUNNING;
   h.cap = ticks + 16;

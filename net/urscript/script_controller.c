@@ -144,9 +144,10 @@ int urt__us_wait_scaled(vm *V, const us_node *at, double t, const char *what) {
       return X_ERR;
     }
     urt_snapshot_t s;
-    double scale = V->snap.speed_scaling;
+    // motion time, not the reported speed_scaling: speedj's limiter slows the arm, not its t
+    double scale = V->snap.motion_rate;
     if (h->snapshot_at && h->snapshot_at(h->ctx, V->tick, &s) == 0) {
-      scale = s.speed_scaling;
+      scale = s.motion_rate;
     }
     tau += scale * period;
   }

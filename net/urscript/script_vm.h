@@ -196,7 +196,7 @@ int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *c
  * the clock: a late VM catches up and never lags), checking the motion is not refused if asked. */
 int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, const char *what);
 /* block for t seconds of motion time: each tick adds period × the speed scaling the controller
- * ran that tick with (its snapshot's speed_scaling: slider × pause), so at scaling 1 exactly
+ * ran that tick with (its snapshot's motion_rate: slider × pause, not speedj's limiter), so at scaling 1 exactly
  * as urt__us_wait_for; a motion the slider scales (speedj) lasts as long as the controller's */
 int urt__us_wait_scaled(vm *V, const us_node *at, double t, const char *what);
 

@@ -317,6 +317,9 @@ static void test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them(void **
   assert_true(off < 1e-12);
   assert_true(vmax_ratio <= 1.0);
   assert_near(s.speed_scaling, f, 1e-12);
+  // motion time (speedj's t, the VM's waits) still runs at the slider's rate: the limiter
+  // slows the arm, not the program (a VM counting in speed_scaling fell behind URCL's spline)
+  assert_near(s.motion_rate, 1.0, 0.0);
   // URCL's spline as it runs: one speedj(qd, |Δqd|/T, T) per period, the elbow's speed rising
   // past its limit (a 3.746 rad cubic segment of 1 s); a scaled goal must never round above the
   // limit (one did, at 3.40 rad/s: a protective stop, speed limit); from rest, on a new rig

@@ -68,6 +68,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   f.s.robot_mode = URT_ROBOT_MODE_RUNNING;
   f.s.period = 0.002;
   f.s.speed_scaling = 1.0;  // slider 100 %: speedj waits in motion time
+  f.s.motion_rate = 1.0;
   urt_script_host_t host = {.ctx = &f, .submit = f_submit, .wait_tick = f_wait_tick,
                             .snapshot = f_snapshot, .message = f_message,
                             .inverse_kinematics = f_ik, .forward_kinematics = f_fk};

@@ -67,6 +67,8 @@ typedef struct urt_snapshot {
   uint32_t pstop;             /* physics protective-stop causes (URT_PSTOP_*)          */
   uint32_t ctrl_fault;        /* URT_CTRL_FAULT_* of the last refusal                  */
   double speed_slider, speed_scaling;
+  double motion_rate;  /* the rate of motion time (slider × pause, without speedj's limiter):
+                          speedj's t and the VM's waits for it count in it */
 
   /* motion bookkeeping (the program runner waits on these) */
   int32_t motion;             /* urt_ctrl_motion_t                                     */

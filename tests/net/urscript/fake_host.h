@@ -132,6 +132,7 @@ static inline void fake_init(fake_host *f, urt_script_host_t *h) {
   pthread_mutex_init(&f->mu, NULL);
   f->s.period = 0.002;
   f->s.speed_scaling = 1.0;  /* as a controller at rest: slider 100 %, not paused */
+  f->s.motion_rate = 1.0;
   f->s.safety_mode = URT_SAFETY_MODE_NORMAL;
   f->s.robot_mode = URT_ROBOT_MODE_RUNNING;
   f->s.program_state = URT_PROGRAM_STOPPED;

@@ -122,6 +122,7 @@ static void test_interp__speedj_with_t_blocks_t(void **state) {
  * the controller's speed_scaling per second, so at 0.25 a t = 0.1 s speedj blocks 200 ticks */
 static void test_interp__speedj_t_is_motion_time_under_the_slider(void **state) {
   R.f.s.speed_scaling = 0.25;
+  R.f.s.motion_rate = 0.25;
   must_run("speedj([0.1, 0, 0, 0, 0, 0], 0.5, 0.1)\nspeedj([0.1, 0, 0, 0, 0, 0], 0.5, 0.002)\n");
   assert_int_equal(R.f.n_cmd, 2);
   assert_int_equal(R.f.s.tick, 204);
