@@ -63,6 +63,7 @@ struct Options {
   bool local_control = false;
   bool no_remote_control = false;
   std::string programs_dir = "programs";
+  std::string programs_alias = "/programs";  // the programs folder's name as clients see it
   std::string serial_number = "20235501783";
   std::string external_control_host = "127.0.0.1:50002";  // the URCap's host IP and port
   double stats_every = 10.0;    // seconds between loop statistics lines (0: never)
@@ -255,6 +256,14 @@ int main(int argc, char** argv) {
   app.add_option("--programs-dir", o.programs_dir,
                  "where dashboard `load` finds programs (URScript text, .urp or .script)")
       ->capture_default_str();
+  app.add_option("--programs-alias", o.programs_alias,
+                 "the programs folder's absolute name as clients see it: a controller's "
+                 "/programs, URSim's /ursim/programs (dashboard `load /ursim/programs/x.urp`)")
+      ->check([](const std::string& s) {
+        return !s.empty() && s[0] == '/' && s.size() < 200 ? std::string()
+                                                           : std::string("an absolute path (starting with /) under 200 characters");
+      })
+      ->capture_default_str();
   app.add_flag("--local-control", o.local_control,
                "e-Series: the teach pendant has control (dashboard refuses state changes)");
   app.add_flag("--no-remote-control", o.no_remote_control,
@@ -406,6 +415,7 @@ int main(int argc, char** argv) {
   ec.port_offset = o.port_offset;
   ec.version = version;
   ec.programs_dir = o.programs_dir.c_str();
+  ec.programs_alias = o.programs_alias.c_str();
   ec.log_dir = o.log_dir.empty() ? nullptr : o.log_dir.c_str();
   ec.local_control = o.local_control;
   ec.remote_control_off = o.no_remote_control;

@@ -410,7 +410,11 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
     e->dash_ctx.programs_dir = e->programs_dir;
     e->cfg.programs_dir = e->programs_dir;
   }
-  e->dash_ctx.programs_alias = "/programs";  // what a real controller shows
+  // what a real controller shows; URSim's is /ursim/programs (URCL's tests load from it)
+  snprintf(e->programs_alias, sizeof e->programs_alias, "%s",
+           cfg->programs_alias && cfg->programs_alias[0] == '/' ? cfg->programs_alias
+                                                                 : "/programs");
+  e->dash_ctx.programs_alias = e->programs_alias;
   e->dash_ctx.program_exts = ".urp,.script";
   e->dash_ctx.prepare_program = urt__program_prepare;  // `load` compiles a .urp
   e->dash_ctx.prepare_user = e;

@@ -58,7 +58,7 @@ struct urt_emulator {
   urt_loop_t *loop;
   const urt_model_t *m;
   urt_emulator_config_t cfg;
-  char bind[64], programs_dir[1024];
+  char bind[64], programs_dir[1024], programs_alias[256];
   int ring[URT__N_RINGS];        /* the I/O thread's command rings, one per kind of client */
   uint64_t rtde_applied_tick;    /* tick of the last RTDE inputs handed to the controller */
   urt_runner_t *runner;

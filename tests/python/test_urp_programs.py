@@ -151,3 +151,24 @@ def test_external_control_node_fetches_and_runs_header_and_body():
                 d.close()
     finally:
         sender.close()
+
+
+def test_programs_alias_names_the_folder_as_clients_see_it():
+    # URSim keeps its programs in /ursim/programs; URCL's dashboard test loads by that
+    # absolute name. The folder on the host stays --programs-dir; a path outside the alias is
+    # still not found, and an alias that is not an absolute path is a usage error (exit 2)
+    with tempfile.TemporaryDirectory() as progs:
+        with open(os.path.join(progs, "wait.urp"), "wb") as f:
+            f.write(urp("<Wait type=\"Sleep\"><waitTime>1.0</waitTime></Wait>"))
+        with Emulator("--programs-dir", progs, "--programs-alias", "/ursim/programs") as emu:
+            d = Dashboard(emu.host)
+            assert d.cmd("load /ursim/programs/wait.urp") == \
+                "Loading program: /ursim/programs/wait.urp"
+            assert d.cmd("load wait.urp") == "Loading program: /ursim/programs/wait.urp"
+            assert d.cmd("load /programs/wait.urp") == "File not found: /programs/wait.urp"
+    import subprocess
+    from urtwin_proc import URTWIN
+    r = subprocess.run([URTWIN, "--programs-alias", "relative/path", "--help-all"],
+                       capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2
+    assert "absolute path" in (r.stdout + r.stderr)

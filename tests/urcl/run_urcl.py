@@ -191,6 +191,9 @@ class Urtwin:
         self.args = [urtwin, "--config", os.path.join(ROOT, "config", "ur5.yaml"),
                      "--bind", ROBOT_IP, "--controller-version", version,
                      "--programs-dir", programs, "--stats-every", "0",
+                     # URSim keeps the programs in /ursim/programs, and URCL's tests, written
+                     # against it, load by that absolute name (load_program_in_subdir_works)
+                     "--programs-alias", "/ursim/programs",
                      # URCL's CI runs against URSim, whose sensors are ideal: its driver tests
                      # compare actual_q at rest before and after a refused command with
                      # EXPECT_FLOAT_EQ (target_outside_limits_servoj/_pose). With the encoders'

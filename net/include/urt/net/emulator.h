@@ -27,6 +27,8 @@ typedef struct urt_emulator_config {
   int port_offset;           /* added to every port                                  */
   urt_version_t version;     /* the emulated controller                              */
   const char *programs_dir;  /* where dashboard `load` finds programs; NULL: none       */
+  const char *programs_alias; /* that folder's absolute name as clients see it (a path
+                                 starting with '/'); NULL: "/programs", a controller's       */
   int local_control;         /* e-Series: 1 = local control (dashboard refuses changes) */
   int remote_control_off;    /* e-Series: remote control disabled (urt_dashboard_state_t) */
   const char *serial_number; /* digits; NULL: "20235501783"                            */
