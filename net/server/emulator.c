@@ -108,8 +108,8 @@ static void stream_ticks(urt_emulator_t *e) {
       continue;
     }
     urt__dashboard_tick(e, &s);  // first: the protective stop's start, for the 5 s rule
-    urt__script_safety_tick(e, &s);
-    urt__script_stream_tick(e, &s);
+    const bool safety_changed = urt__script_safety_tick(e, &s);
+    urt__script_stream_tick(e, &s, safety_changed);
     urt__rtde_stream_tick(e, &s);
   }
   e->streamed_tick = newest;

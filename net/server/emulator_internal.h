@@ -120,6 +120,7 @@ struct urt_emulator {
   urt_ctrl_log_t log;            /* the controller's log (ctrl_log.h)                 */
   char log_dir[1024];            /* where saveLog & co. write it; "" : nowhere         */
   double pstop_since;            /* controller time the protective stop began, < 0: none */
+  bool unlock_pending;           /* a primary unlock asked for within the 5 s: done at 5 s  */
 
   /* the loaded program (program_play.c): a compiled .urp, or NULL for a URScript file; and
    * the thread that fetches an External Control node's program before playing it */
@@ -172,12 +173,13 @@ void urt__inputs_read(urt_emulator_t *e, uint64_t tick, urt_rtde_registers_t *r)
 
 /* Per tick, in order: RTDE inputs into the controller, then what every port streams. */
 void urt__rtde_apply_inputs(urt_emulator_t *e);
-void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s);
+void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s, bool safety_changed);
 void urt__rtde_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s);
 void urt__dashboard_tick(urt_emulator_t *e, const urt_snapshot_t *s);
 
-/* Safety-mode change messages, before this tick's state (port_script.c). */
-void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s);
+/* Safety-mode change messages, before this tick's state (port_script.c); true when the mode
+ * changed this tick (the robot state then goes out in the same tick). */
+bool urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s);
 
 /* The dashboard's saveLog, generate flight report and generate support file
  * (urt_dashboard_ctx_t.write_log; port_dashboard.c). */

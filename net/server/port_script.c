@@ -95,13 +95,25 @@ void urt__script_broadcast_text(urt_emulator_t *e, const char *text) {
  * Stops with other causes (limits, the physics) get the SAFETY_MODE message only: urtwin does
  * not model UR's error codes for them. Code, argument and report data of SAFETY_MODE are 0:
  * their values on a real controller are not documented. Called before the tick's robot state,
- * so that on unlock the NORMAL message precedes the state that clears the flag. */
-void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
+ * so that on unlock the NORMAL message precedes the state that clears the flag; and a change
+ * sends that state in the same tick (urt__script_stream_tick), not at the next 10 Hz one:
+ * URCL's test_read_safety_mode sees PROTECTIVE_STOP in the message, then asks for an unlock
+ * and waits 1 ms for RobotModeData's flag to clear, which it expects to time out; with the
+ * state 100 ms behind, the flag it read was still the old, clear one. */
+bool urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
   int32_t mode = s->safety_mode;
   int32_t was = e->last_safety_mode;
   e->last_safety_mode = mode;
+  if (e->unlock_pending) {  // a primary unlock asked for within the 5 s
+    if (mode != URT_SAFETY_MODE_PROTECTIVE_STOP || e->pstop_since < 0) {
+      e->unlock_pending = false;
+    } else if (s->time - e->pstop_since >= 5.0) {
+      e->unlock_pending = false;
+      urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_UNLOCK_PSTOP);
+    }
+  }
   if (was < 0 || was == mode) {
-    return;
+    return false;
   }
   uint8_t buf[256];
   uint64_t ts = (uint64_t)(s->time * 1e6 + 0.5);
@@ -144,17 +156,18 @@ void urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
       urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
     }
   }
+  return true;
 }
 
 //---- streaming ----
 
-void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
+void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s, bool safety_changed) {
   uint8_t rt[URT_RT_PACKET_MAX];
   size_t n = urt_rt_packet_encode(&e->cfg.version, s, rt, sizeof rt);
   if (n > 0) {
     urt__send_to(e, is_rt, rt, n, &e->rt_packets, &e->rt_dropped);
   }
-  if (s->tick % e->state_every == 0) {
+  if (s->tick % e->state_every == 0 || safety_changed) {
     uint8_t state[URT_PRIMARY_MAX_MESSAGE];
     int m = urt_primary_encode_robot_state(&e->cfg.version, &e->info, s, state, sizeof state);
     if (m > 0) {
@@ -165,13 +178,16 @@ void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
 
 //---- input ----
 
-/* `set unlock protective stop`: as on a real controller, not within 5 s of the stop (the
- * dashboard's `unlock protective stop` has the same rule). Refused with a text message. */
+/* `set unlock protective stop`: as on a real controller, never within 5 s of the stop. One
+ * asked for earlier takes effect when the 5 s are over (urt__script_safety_tick), as URCL's
+ * primary-client tests expect of URSim: test_send_script_blocking_fails_on_bad_safety_mode and
+ * _ignore_warnings unlock right after a protective_stop() and wait at most 5 s for the flag to
+ * clear, while test_read_safety_mode's 1 ms wait right after the stop must time out. (The
+ * dashboard's `unlock protective stop` refuses within the 5 s, with UR's reply.) */
 static void unlock_protective_stop(urt_emulator_t *e) {
   double age = e->pstop_since >= 0 ? urt__timestamp_us(e) * 1e-6 - e->pstop_since : -1.0;
   if (age >= 0.0 && age < 5.0) {
-    urt__script_broadcast_text(e, "Cannot unlock protective stop until 5s after occurrence. "
-                                  "Always inspect cause of protective stop before unlocking");
+    e->unlock_pending = true;
     return;
   }
   urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_UNLOCK_PSTOP);
