@@ -118,7 +118,7 @@ static int read_wait(vm *V, const us_node *n, const char *name, double timeout, 
     // looked up again after every wait: another thread may have closed it meanwhile
     us_sock *s = urt__us_sock_find(t, name);
     if (!s || s->state != US_SOCK_OPEN) return X_OK;
-    urt__us_sock_fill(s);
+    urt__us_sock_fill(s, V->tick);
     int r = take(s, ctx);
     if (r != 0 || s->eof) {
       *ok = r > 0;

@@ -53,6 +53,7 @@ void urt__us_sock_close(us_sock *s) {
   s->eof = s->broken = false;
   s->rx_n = 0;
   s->tx_n = 0;
+  s->rx_tick = 0;
   s->name[0] = 0;
 }
 
@@ -218,6 +219,7 @@ int urt__us_sock_connect(us_sockets *t, const char *name, const char *host, int 
   setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
   s->eof = s->broken = false;
   s->rx_n = s->tx_n = 0;
+  s->rx_tick = 0;
   s->fd = fd;
   snprintf(s->name, sizeof s->name, "%s", name);
   if (connect(fd, (const struct sockaddr *)&sa, len) == 0) {
@@ -274,11 +276,15 @@ static void flush_tx(us_sock *s) {
   }
 }
 
-void urt__us_sock_fill(us_sock *s) {
+void urt__us_sock_fill(us_sock *s, uint64_t tick) {
   if (s->state != US_SOCK_OPEN) {
     return;
   }
   flush_tx(s);
+  if (s->rx_tick == tick + 1) {
+    return;  // received once this tick already
+  }
+  s->rx_tick = tick + 1;
   while (!s->eof && s->rx_n < sizeof s->rx) {
     ssize_t k = recv(s->fd, s->rx + s->rx_n, sizeof s->rx - s->rx_n, MSG_DONTWAIT);
     if (k > 0) {

@@ -38,6 +38,7 @@ typedef struct us_sock {
   char name[US_SOCK_NAME];
   size_t rx_n;              /* bytes in rx */
   size_t tx_n;              /* bytes a partial write left, sent before anything newer */
+  uint64_t rx_tick;         /* 1 + the controller tick of the last receive (0: none yet) */
   uint8_t rx[US_SOCK_RX];
   uint8_t tx[US_SOCK_TX];
 } us_sock;
@@ -85,9 +86,13 @@ int urt__us_sock_connect(us_sockets *t, const char *name, const char *host, int 
 /* Advance a connecting socket: 1 open, 0 still connecting, -1 failed (the socket is freed). */
 int urt__us_sock_poll_connect(us_sock *s);
 
-/* Move what the kernel holds into s->rx (up to its capacity) and push out a queued rest of
- * a write; sets s->eof when the peer closed. Never blocks. */
-void urt__us_sock_fill(us_sock *s);
+/* Push out a queued rest of a write and, once per controller tick, move what the kernel holds
+ * into s->rx (up to its capacity); sets s->eof when the peer closed. Reads within one tick see
+ * what had arrived at the tick's first read, never bytes that came while the slice ran: a
+ * program's reads depend on the ticks, not on how long the slice took, and a loop draining a
+ * socket a client floods (URCL's tool_contact_example writes without pause) reads at most one
+ * buffer per tick and then waits, instead of running without end in one tick. Never blocks. */
+void urt__us_sock_fill(us_sock *s, uint64_t tick);
 
 /* Drop the first n bytes of s->rx. */
 void urt__us_sock_consume(us_sock *s, size_t n);

@@ -11,6 +11,7 @@
 #include <math.h>
 #include <netinet/tcp.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "fake_host.h"
@@ -170,6 +171,106 @@ static void test_socket__string_suffix_with_interpret_escape(void **state) {
   // escapes on: the suffix is a newline; off: the two characters backslash and n
   assert_msg(0, "a b", 5);
   assert_msg(1, "c", 5);
+}
+
+/* the peer writes a record when the program sets digital out 3, i.e. while the slice runs */
+static bool submit_then_peer_writes(void *ctx, const urt_ctrl_cmd_t *c) {
+  bool ok = fake_submit(ctx, c);
+  if (c->kind == URT_CTRL_SET_DIGITAL_OUT && c->index == 3) {
+    fix_send(&X, "\x00\x00\x00\x02", 4);
+  }
+  return ok;
+}
+
+static void test_socket__bytes_that_arrive_while_the_slice_runs_are_read_the_next_tick(void **state) {
+  // record 1 is there when tick 5 starts; record 2 comes in the middle of tick 5's slice: a
+  // second read in that slice waits for tick 6, as it would had the slice run faster
+  H.submit = submit_then_peer_writes;
+  fix_at(&X, 5, "\x00\x00\x00\x01", 4);
+  must_run("socket_open(\"127.0.0.1\", %d, \"s\")\n"
+           "textmsg(socket_read_binary_integer(1, \"s\", 0))\n"
+           "set_standard_digital_out(3, True)\n"
+           "textmsg(socket_read_binary_integer(1, \"s\", 0))\n");
+  assert_msg(0, "[1,1]", 5);
+  assert_msg(1, "[1,2]", 6);
+}
+
+/* a client that writes without pause (URCL's tool_contact_example), from its own thread */
+typedef struct flood {
+  int fd;
+  volatile bool stop;
+  long sent;
+} flood;
+
+static void *flood_main(void *arg) {
+  flood *f = arg;
+  static const char rec[4] = {0, 0, 0, 1};
+  while (!f->stop) {
+    ssize_t k = send(f->fd, rec, sizeof rec, MSG_NOSIGNAL | MSG_DONTWAIT);
+    if (k > 0) f->sent += k;
+    else usleep(50);
+  }
+  return NULL;
+}
+
+static flood g_flood;
+static pthread_t g_flood_thread;
+static bool g_flood_on;
+
+static uint64_t wait_tick_start_flood(void *ctx, uint64_t after, int timeout_ms) {
+  uint64_t t = wait_tick_with_peer(ctx, after, timeout_ms);
+  if (!g_flood_on && X.conn_fd >= 0) {
+    g_flood = (flood){.fd = X.conn_fd};
+    g_flood_on = pthread_create(&g_flood_thread, NULL, flood_main, &g_flood) == 0;
+  }
+  usleep(200);  // the peer keeps writing while the program waits, as a real client does
+  return t;
+}
+
+static void test_socket__a_flooding_peer_is_drained_one_buffer_per_tick(void **state) {
+  // the loop reads a record per iteration and only waits when the buffer is empty; with the
+  // peer writing all the while, a read that went back to the kernel in the same slice never
+  // found it empty and ran into the step budget ("Runtime is too much behind")
+  H.wait_tick = wait_tick_start_flood;
+  g_flood_on = false;
+  int rc = run("def flooded():\n"
+               "global ticks = 0\n"
+               "thread clock():\n"
+               "  while True:\n"
+               "    ticks = ticks + 1\n"
+               "    sync()\n"
+               "  end\n"
+               "end\n"
+               "c = run clock()\n"
+               "socket_open(\"127.0.0.1\", %d, \"s\")\n"
+               "n = 0\n"
+               "most = 0\n"
+               "t0 = 0\n"
+               "in_tick = 0\n"
+               "while n < 20000:\n"
+               "  r = socket_read_binary_integer(1, \"s\", 0)\n"
+               "  n = n + r[1]\n"
+               "  t = ticks\n"
+               "  if t == t0:\n"
+               "    in_tick = in_tick + 1\n"
+               "  else:\n"
+               "    t0 = t\n"
+               "    in_tick = 1\n"
+               "  end\n"
+               "  if in_tick > most:\n"
+               "    most = in_tick\n"
+               "  end\n"
+               "end\n"
+               "kill c\n"
+               "textmsg(most)\n"
+               "end\n");
+  g_flood.stop = true;
+  if (g_flood_on) pthread_join(g_flood_thread, NULL);
+  if (rc != 0) fail_msg("run: %u:%u %s", E.line, E.column, E.text);
+  int most = atoi(F.msg[F.n_msg - 1].text);
+  print_message("flood: %ld bytes sent, at most %d records read in one tick (buffer %d)\n",
+                g_flood.sent, most, US_SOCK_RX / 4);
+  assert_true(most >= 1 && most <= US_SOCK_RX / 4);
 }
 
 static void test_socket__peer_that_closes_fails_reads_at_once(void **state) {
@@ -411,6 +512,8 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_socket__strings_with_prefix_and_suffix, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__string_suffix_with_interpret_escape, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__peer_that_closes_fails_reads_at_once, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__bytes_that_arrive_while_the_slice_runs_are_read_the_next_tick, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__a_flooding_peer_is_drained_one_buffer_per_tick, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__sends_reach_the_peer, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__get_var_round_trip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__sends_have_nodelay, setup, teardown),
