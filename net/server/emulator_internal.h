@@ -120,7 +120,6 @@ struct urt_emulator {
   urt_ctrl_log_t log;            /* the controller's log (ctrl_log.h)                 */
   char log_dir[1024];            /* where saveLog & co. write it; "" : nowhere         */
   double pstop_since;            /* controller time the protective stop began, < 0: none */
-  bool unlock_pending;           /* a primary unlock asked for within the 5 s: done at 5 s  */
 
   /* the loaded program (program_play.c): a compiled .urp, or NULL for a URScript file; and
    * the thread that fetches an External Control node's program before playing it */

@@ -104,14 +104,6 @@ bool urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
   int32_t mode = s->safety_mode;
   int32_t was = e->last_safety_mode;
   e->last_safety_mode = mode;
-  if (e->unlock_pending) {  // a primary unlock asked for within the 5 s
-    if (mode != URT_SAFETY_MODE_PROTECTIVE_STOP || e->pstop_since < 0) {
-      e->unlock_pending = false;
-    } else if (s->time - e->pstop_since >= 5.0) {
-      e->unlock_pending = false;
-      urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_UNLOCK_PSTOP);
-    }
-  }
   if (was < 0 || was == mode) {
     return false;
   }
@@ -178,18 +170,16 @@ void urt__script_stream_tick(urt_emulator_t *e, const urt_snapshot_t *s, bool sa
 
 //---- input ----
 
-/* `set unlock protective stop`: as on a real controller, never within 5 s of the stop. One
- * asked for earlier takes effect when the 5 s are over (urt__script_safety_tick), as URCL's
- * primary-client tests expect of URSim: test_send_script_blocking_fails_on_bad_safety_mode and
- * _ignore_warnings unlock right after a protective_stop() and wait at most 5 s for the flag to
- * clear, while test_read_safety_mode's 1 ms wait right after the stop must time out. (The
- * dashboard's `unlock protective stop` refuses within the 5 s, with UR's reply.) */
+/* `set unlock protective stop` on the primary interface takes effect at once; only the
+ * dashboard's `unlock protective stop` keeps UR's documented 5 s rule ("Cannot unlock
+ * protective stop until 5s after occurrence", port_dashboard.c). Why: URCL's primary-client
+ * test_send_script_blocking_fails_on_bad_safety_mode sends it a few ms after protective_stop()
+ * and polls every 50 ms for 5 s until RobotModeData's flag clears; it passes against URSim
+ * (URCL's CI: 3.14, 5.9, latest 5.x), which an unlock held until 5 s after the stop would make
+ * a coin toss (it failed here every run, the flag clearing a few ms before the deadline and
+ * after the last poll). test_read_safety_mode's 1 ms wait right after the stop still times
+ * out: the unlock goes through the controller's command ring and the next tick. */
 static void unlock_protective_stop(urt_emulator_t *e) {
-  double age = e->pstop_since >= 0 ? urt__timestamp_us(e) * 1e-6 - e->pstop_since : -1.0;
-  if (age >= 0.0 && age < 5.0) {
-    e->unlock_pending = true;
-    return;
-  }
   urt__submit_kind(e, URT__RING_SCRIPT, URT_CTRL_UNLOCK_PSTOP);
 }
 

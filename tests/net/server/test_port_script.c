@@ -4,7 +4,8 @@
  * (external_control.md §1.3): no SAFETY_MODE message before the first change; on a program's
  * protective stop one SAFETY_MODE(PROTECTIVE_STOP) and exactly one ERROR_CODE C209A0 WARNING;
  * the robot state with the flag in the same tick as that message; `set unlock protective stop`
- * sent within 5 s of the stop takes effect when the 5 s are over; on unlock SAFETY_MODE(NORMAL)
+ * sent right after the stop takes effect at once (the dashboard keeps the 5 s rule: URCL's
+ * primary-client tests expect this of URSim, port_script.c); on unlock SAFETY_MODE(NORMAL)
  * arrives before the robot state that clears the flag. */
 #define _GNU_SOURCE
 #include <arpa/inet.h>
@@ -150,7 +151,7 @@ static void submit(fixture_t *f, int kind) {
   assert_true(urt_loop_submit(f->loop, f->producer, &cmd));
 }
 
-static void test_port_script__protective_stop_messages_and_the_5_s_unlock_rule(void **state) {
+static void test_port_script__protective_stop_messages_and_an_unlock_at_once(void **state) {
   fixture_t *f = *state;
   int fd = connect_primary();
 
@@ -168,6 +169,7 @@ static void test_port_script__protective_stop_messages_and_the_5_s_unlock_rule(v
   int safety = 0, errors = 0, saw_flag = 0;
   double t_flag = 0.0;  /* controller time of the first state with the flag: the rule's clock */
   double t_safety = -1.0;
+  double t_last_flag = 0.0; /* the newest state with the flag */
   while (now_s() - t_stop < 1.0) {
     next_event(fd, &ev);
     if (ev.type == 20 && ev.msg_type == URT_PRIMARY_MSG_SAFETY_MODE) {
@@ -179,9 +181,10 @@ static void test_port_script__protective_stop_messages_and_the_5_s_unlock_rule(v
       assert_int_equal(ev.arg, 0);
       assert_int_equal(ev.level, URT_PRIMARY_REPORT_WARNING);
       errors++;
-    } else if (ev.type == 16 && ev.pstopped == 1 && !saw_flag) {
+    } else if (ev.type == 16 && ev.pstopped == 1) {
+      if (!saw_flag) t_flag = ev.time;
       saw_flag = 1;
-      t_flag = ev.time;
+      t_last_flag = ev.time;
     }
   }
   assert_int_equal(safety, 1);
@@ -192,28 +195,20 @@ static void test_port_script__protective_stop_messages_and_the_5_s_unlock_rule(v
   print_message("SAFETY_MODE at %.6f s, first state with the flag at %.6f s\n", t_safety, t_flag);
   assert_true(fabs(t_flag - t_safety) < 1.5e-6);
 
-  // too early: nothing yet (no text, no state without the flag, no SAFETY_MODE) ...
+  // an unlock sent right away takes effect at once, not 5 s after the stop: SAFETY_MODE(NORMAL)
+  // before the first state with the flag cleared, a few ticks of controller time after the last
+  // state that still had it. Judged in controller time; the wall bound only ends a hung run
   const char unlock[] = "set unlock protective stop\n";
   assert_int_equal(send(fd, unlock, sizeof unlock - 1, 0), (ssize_t)(sizeof unlock - 1));
-  double t1 = now_s();
-  while (now_s() - t1 < 0.5) {
-    next_event(fd, &ev);
-    assert_false(ev.type == 20 && ev.msg_type == URT_PRIMARY_MSG_TEXT);
-    assert_false(ev.type == 16 && ev.pstopped == 0);
-    assert_false(ev.type == 20 && ev.msg_type == URT_PRIMARY_MSG_SAFETY_MODE);
-  }
-
-  // ... it takes effect 5 s of controller time after the stop: SAFETY_MODE(NORMAL) before the
-  // first state with the flag cleared. Judged in controller time; the wall bound only ends a
-  // hung run (under ASan, with another test on the other core, 5 s of controller time took
-  // over 30 s of wall time in a fresh clone)
   int normal_seen = 0, cleared = 0;
   double t_cleared = 0.0;
-  while (!cleared && now_s() - t_stop < 180.0) {
+  while (!cleared && now_s() - t_stop < 60.0) {
     next_event(fd, &ev);
     if (ev.type == 20 && ev.msg_type == URT_PRIMARY_MSG_SAFETY_MODE) {
       assert_int_equal(ev.safety_mode, URT_SAFETY_MODE_NORMAL);
       normal_seen++;
+    } else if (ev.type == 16 && ev.pstopped == 1) {
+      t_last_flag = ev.time;
     } else if (ev.type == 16 && ev.pstopped == 0) {
       assert_int_equal(normal_seen, 1);
       cleared = 1;
@@ -221,14 +216,17 @@ static void test_port_script__protective_stop_messages_and_the_5_s_unlock_rule(v
     }
   }
   assert_true(cleared);
-  print_message("early unlock took effect %.3f s after the stop\n", t_cleared - t_flag);
-  assert_true(t_cleared >= t_flag + 5.0 - 1e-6 && t_cleared < t_flag + 5.1);
+  print_message("unlock took effect %.3f s after the stop, %.3f s after the last flagged state\n",
+                t_cleared - t_flag, t_cleared - t_last_flag);
+  // the flagged states come at 10 Hz: the clear one follows the last of them within a period
+  assert_true(t_cleared - t_last_flag <= 0.1 + 1e-6);
+  assert_true(t_cleared < t_flag + 5.0);
   close(fd);
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_port_script__protective_stop_messages_and_the_5_s_unlock_rule),
+      cmocka_unit_test(test_port_script__protective_stop_messages_and_an_unlock_at_once),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }
