@@ -62,8 +62,18 @@ static bool rtde_input(urt_emulator_t *e, urt__client_t *c, const uint8_t *data,
   return true;
 }
 
+static void apply(urt_emulator_t *e, const urt_rtde_inputs_t *all);
+
 static void rtde_close(urt_emulator_t *e, urt__client_t *c) {
   if (c->proto) {
+    // inputs it sent after the period's first wait for the tick; the client has gone by then
+    // (close_client has taken it off the list), but the bytes arrived before its FIN and a
+    // controller acts on them: URCL's rtde_client_example sets the slider back to 100 % and
+    // exits at once, and the examples after it ran at the slider it had left (a third)
+    urt_rtde_inputs_t last;
+    if (urt_rtde_session_take_inputs(c->proto, &last)) {
+      apply(e, &last);
+    }
     urt_rtde_session_fini(c->proto);
     free(c->proto);
     c->proto = NULL;
@@ -103,30 +113,34 @@ void urt__rtde_apply_inputs(urt_emulator_t *e) {
       }
     }
   }
-  if (!any) {
-    return;
+  if (any) {
+    apply(e, &all);
   }
+}
+
+// Hand merged inputs to the controller: the registers (latched for the tick), then commands.
+static void apply(urt_emulator_t *e, const urt_rtde_inputs_t *in) {
   e->rtde_applied_tick = urt_loop_latest_tick(e->loop);
   pthread_mutex_lock(&e->reg_lock);
-  urt_rtde_inputs_apply_registers(&all, &e->regs);
+  urt_rtde_inputs_apply_registers(in, &e->regs);
   urt__inputs_latch(e, e->rtde_applied_tick);
   pthread_mutex_unlock(&e->reg_lock);
-  if (all.set & URT_RTDE_IN_SPEED_SLIDER) {
-    urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_SPEED_SLIDER, .value = all.speed_slider_fraction};
+  if (in->set & URT_RTDE_IN_SPEED_SLIDER) {
+    urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_SPEED_SLIDER, .value = in->speed_slider_fraction};
     urt__submit(e, URT__RING_RTDE, &cmd);
   }
-  if (all.set & URT_RTDE_IN_EXT_FT) {
+  if (in->set & URT_RTDE_IN_EXT_FT) {
     // the virtual world pushes the tool with this wrench (it is what the physics feels)
     urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_WRENCH};
-    memcpy(cmd.pose, all.external_force_torque, sizeof cmd.pose);
+    memcpy(cmd.pose, in->external_force_torque, sizeof cmd.pose);
     urt__submit(e, URT__RING_RTDE, &cmd);
   }
-  submit_outputs(e, 0, all.std_do_mask, all.std_do);
-  submit_outputs(e, 8, all.conf_do_mask, all.conf_do);
-  submit_outputs(e, 16, all.tool_do_mask & 3, all.tool_do);
+  submit_outputs(e, 0, in->std_do_mask, in->std_do);
+  submit_outputs(e, 8, in->conf_do_mask, in->conf_do);
+  submit_outputs(e, 16, in->tool_do_mask & 3, in->tool_do);
   for (int i = 0; i < 2; i++) {
-    if (all.ao_mask >> i & 1) {
-      urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_ANALOG_OUT, .index = i, .value = all.ao[i]};
+    if (in->ao_mask >> i & 1) {
+      urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_SET_ANALOG_OUT, .index = i, .value = in->ao[i]};
       urt__submit(e, URT__RING_RTDE, &cmd);
     }
   }

@@ -84,3 +84,27 @@ def test_malformed_packages_leave_the_session_usable():
         s.close()
         with RtdeClient(emu.host) as c:
             assert c.negotiate_protocol_version(2)
+
+
+def test_inputs_sent_just_before_a_close_still_reach_the_controller():
+    """A client that writes inputs and closes at once (URCL's rtde_client_example sets the slider
+    back to 100 % and exits): the inputs after the period's first waited for the tick in the
+    session, which the close freed, and the slider stayed at the first value of the burst."""
+    with Emulator() as emu:
+        with RtdeClient(emu.host) as watch:
+            assert watch.negotiate_protocol_version(2)
+            watch.setup_outputs(["timestamp", "target_speed_fraction"], frequency=500)
+            assert watch.start()
+            for final in (0.3, 0.6, 0.45):
+                with RtdeClient(emu.host) as c:
+                    assert c.negotiate_protocol_version(2)
+                    inp = c.setup_inputs(["speed_slider_mask", "speed_slider_fraction"])
+                    for value in (0.9, 0.8, final):  # one send each, microseconds apart
+                        c.send_inputs(inp, {"speed_slider_mask": 1, "speed_slider_fraction": value})
+                # closed: the slider must end at the burst's last value
+                seen = None
+                for _ in range(250):  # 0.5 s of packages
+                    seen = watch.receive().values["target_speed_fraction"]
+                    if abs(seen - final) < 1e-12:
+                        break
+                assert seen == pytest.approx(final, abs=1e-12), (final, seen)
