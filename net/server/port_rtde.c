@@ -66,10 +66,9 @@ static void apply(urt_emulator_t *e, const urt_rtde_inputs_t *all);
 
 static void rtde_close(urt_emulator_t *e, urt__client_t *c) {
   if (c->proto) {
-    // inputs it sent after the period's first wait for the tick; the client has gone by then
-    // (close_client has taken it off the list), but the bytes arrived before its FIN and a
-    // controller acts on them: URCL's rtde_client_example sets the slider back to 100 % and
-    // exits at once, and the examples after it ran at the slider it had left (a third)
+    // inputs it sent after the period's first wait in the session for the next tick, which
+    // would no longer see them (close_client has taken the client off the list); the bytes
+    // arrived before its FIN and a controller acts on them, so they are applied here
     urt_rtde_inputs_t last;
     if (urt_rtde_session_take_inputs(c->proto, &last)) {
       apply(e, &last);
