@@ -12,8 +12,9 @@ What it does, per controller version:
     fake servers can run;
   * runs every test of every integration binary (tests/CMakeLists.txt: the _headless and
     _urcap variants with --headless true|false) one at a time, as ctest would, each bounded by
-    a timeout and read back from gtest's JSON; then each example with its arguments
-    (external_control.md §4.2), bounded too.
+    a timeout and read back from gtest's JSON; then every example in the order and with the
+    argument URCL's CI gives them (run_examples.sh ROBOT 1; external_control.md §4.2), bounded
+    too.
 Each version runs in its own network namespace when the machine allows it (unshare -n, as
 root): only a loopback device exists there, so nothing a test or URCL's servers (they bind
 0.0.0.0) do can reach beyond this host, the two versions can run side by side, and other
