@@ -81,32 +81,40 @@ BINARIES = [
 ]
 
 # examples (external_control.md §4.2), as URCL's CI runs them (run_examples.sh ROBOT 1): every
-# binary of build/examples in the shell's glob order (alphabetical), each with the argument "1"
-# (the seconds to run, for those that read one), one urtwin for all. The order matters: the
-# examples leave the arm and the speed slider where they end. rtde_client_example sweeps the
-# slider and its final sendSpeedSlider(1) races URCL's writer-thread stop and is not sent, so
-# the examples after it run at the slider it left (about 0.5), on URSim in URCL's CI as here;
-# spline_example's first point moves wrist 3 to about 0 within 1 s from wherever the example
-# before it left the arm (send_script's movej, in this order). Timeouts [s] allow that slider.
-EXAMPLES = [
-    ("dashboard_example", ["1"], 90),
-    ("direct_torque_control_example", ["1"], 45),
-    ("driver_example", ["1"], 90),
-    ("external_fts_through_rtde", ["1"], 45),
-    ("force_mode_example", ["1"], 45),
-    ("freedrive_example", ["1"], 45),
-    ("instruction_executor", ["1"], 180),
-    ("primary_pipeline_calibration_example", ["1"], 30),
-    ("primary_pipeline_example", ["1"], 30),
-    ("rtde_client_example", ["1"], 30),
-    ("script_command_interface_example", ["1"], 60),
-    ("script_sender_example", ["1"], 30),  # no robot involved: a server on 50002 for 1 s
-    ("send_script", ["1"], 90),
-    ("spline_example", ["1"], 300),
-    ("tool_contact_example", ["1"], 90),
-    ("trajectory_point_interface_example", ["1"], 180),
-    ("trajectory_streaming_example", ["1"], 120),
-]
+# binary of build/examples in the shell's glob order (alphabetical: example_order()), each with
+# the arguments EXAMPLE_ARGS ("1": the seconds to run, for those that read one), one urtwin for
+# all. The order matters: the examples leave the arm and the speed slider where they end.
+# rtde_client_example sweeps the slider and its final sendSpeedSlider(1) races URCL's
+# writer-thread stop and is not sent, so the examples after it run at the slider it left (about
+# 0.5), on URSim in URCL's CI as here; spline_example's first point moves wrist 3 to about 0
+# within 1 s from wherever the example before it left the arm (send_script's movej, in this
+# order). Timeouts [s] allow that slider.
+EXAMPLE_ARGS = ["1"]
+EXAMPLE_TIMEOUTS = {
+    "dashboard_example": 90,
+    "direct_torque_control_example": 45,
+    "driver_example": 90,
+    "external_fts_through_rtde": 45,
+    "force_mode_example": 45,
+    "freedrive_example": 45,
+    "instruction_executor": 180,
+    "primary_pipeline_calibration_example": 30,
+    "primary_pipeline_example": 30,
+    "rtde_client_example": 30,
+    "script_command_interface_example": 60,
+    "script_sender_example": 30,  # no robot involved: a server on 50002 for 1 s
+    "send_script": 90,
+    "spline_example": 300,
+    "tool_contact_example": 90,
+    "trajectory_point_interface_example": 180,
+    "trajectory_streaming_example": 120,
+}
+
+
+def example_order():
+    """(name, timeout) in run_examples.sh's order: its `for file in build/examples/*` glob sorts
+    the names; these 17 sort the same in the C and en_US locales (checked in session 13)."""
+    return sorted(EXAMPLE_TIMEOUTS.items())
 
 # our own programs on URCL's public API (tests/urcl/*.cpp, built by `make urcl` into
 # build/urcl/ours/): arguments after the robot address, timeout [s], the versions they run on
@@ -519,7 +527,7 @@ def run_version(args, name):
                 results[f"{binary}/{test}"]["note"] = "run with urtwin stopped"
             robot.start()
         if args.examples:
-            for example, extra, timeout in EXAMPLES:
+            for example, timeout in example_order():
                 test_id = f"examples/{example}"
                 if filt and not filt.search(test_id):
                     continue
@@ -529,7 +537,7 @@ def run_version(args, name):
                 if reason:
                     results[test_id] = {"status": "excluded", "seconds": 0.0, "note": reason}
                     continue
-                rec = run_program([os.path.join(exdir, example), ROBOT_IP, *extra], work,
+                rec = run_program([os.path.join(exdir, example), ROBOT_IP, *EXAMPLE_ARGS], work,
                                   timeout, os.path.join(logs, f"example_{example}.log"))
                 known = match(patterns, test_id, "known")
                 if known and rec["status"] != "passed":
