@@ -187,12 +187,15 @@ void apply_override(Origin *origin, YAML::Node root, const std::string &text) {
 //---- the model: one function per section of the file ----
 
 void load_simulation(const Field &f, urt_model_t *m) {
-  Map s = f.map({"dt", "seed", "drives_engaged", "substep_h_max", "substep_ratio"});
+  Map s = f.map({"dt", "seed", "drives_engaged", "substep_h_max", "substep_ratio"},
+                {"refine_every"});
   m->dt = s["dt"].number(in_lo_open(0.0, 1e-3));
   m->seed = s["seed"].integer(0, std::numeric_limits<uint64_t>::max());
   m->drives_engaged = s["drives_engaged"].boolean() ? 1 : 0;
   m->substep_h_max = s["substep_h_max"].number(in_lo_open(0.0, 1e-3));
   m->substep_ratio = s["substep_ratio"].number(gt(0.0));
+  const Field *refine = s.get("refine_every");
+  m->refine_every = refine ? (uint32_t)refine->integer(0, UINT32_MAX) : 0u;
 }
 
 // Inertia about the CoM: a physical rigid body has a positive-definite tensor whose diagonal

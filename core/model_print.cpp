@@ -294,6 +294,7 @@ void print_simulation(Emitter &e, const urt_model_t *m) {
   e.boolean("drives_engaged", m->drives_engaged != 0, "-");
   e.num("substep_h_max", m->substep_h_max, "s");
   e.num("substep_ratio", m->substep_ratio, "-");
+  e.uint("refine_every", m->refine_every, "steps");
   e.end_map();
 }
 

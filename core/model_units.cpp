@@ -25,6 +25,7 @@ const KeyUnit kUnits[] = {
     {"simulation.drives_engaged", "-"},
     {"simulation.substep_h_max", "s"},
     {"simulation.substep_ratio", "-"},
+    {"simulation.refine_every", "steps"},
     {"supply.v_net", "V"},
     {"arm.gravity", "m/s^2"},
     {"arm.tcp", "m, m, m, rad, rad, rad"},

@@ -166,6 +166,7 @@ static void test_model_load__loads_ur5_in_si_units(void **state) {
   assert_int_equal(m->drives_engaged, 1);
   assert_near(m->substep_h_max, 5e-6, 0.0);
   assert_near(m->substep_ratio, 0.015, 0.0);
+  assert_int_equal(m->refine_every, 0);  // optional, absent from ur5.yaml: never forced
 
   // arm: Table 4 mm/deg converted to m/rad, Table 5 with the link-1 ×1e-4 restored
   assert_near(m->arm.link[0].a, 0.110e-3, 1e-15);
@@ -303,6 +304,17 @@ static void test_model_load__rejects_out_of_range_value(void **state) {
   int line;
   char *bad = edit(ur5_text, "name: shoulder", "kt: 0.1361", "kt: -0.1", &line);
   expect_error(bad, NULL, URT_ECONFIG, ":%d: joints[1].motor.kt: must be > 0 (got -0.1)", line);
+  free(bad);
+}
+
+static void test_model_load__rejects_a_refine_every_that_is_not_a_step_count(void **state) {
+  (void)state;
+  int line;
+  char *bad = edit(ur5_text, NULL, "substep_ratio: 0.015",
+                   "substep_ratio: 0.015\n  refine_every: -40", &line);
+  expect_error(bad, NULL, URT_ECONFIG,
+               ":%d: simulation.refine_every: must be an integer in [0, 4294967295] (got '-40')",
+               line + 1);
   free(bad);
 }
 
@@ -588,6 +600,7 @@ int main(void) {
       cmocka_unit_test(test_model_load__rejects_override_index_out_of_range),
       cmocka_unit_test(test_model_load__rejects_override_of_unknown_key),
       cmocka_unit_test(test_model_load__rejects_override_with_bad_yaml),
+      cmocka_unit_test(test_model_load__rejects_a_refine_every_that_is_not_a_step_count),
       cmocka_unit_test(test_model_load__rejects_a_payload_the_ur5_cannot_carry),
       cmocka_unit_test(test_model_load__payload_override_reaches_the_model),
       cmocka_unit_test(test_model_load__rejects_override_that_breaks_a_cross_check),

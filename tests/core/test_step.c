@@ -268,6 +268,40 @@ static void test_step__noisy_excitations_at_10_and_20_khz_never_stop(void **stat
   run_excitation("simulation.dt=5e-5", 3);
 }
 
+// simulation.refine_every = 4: steps 4, 8, ... take the refined path (the macro step is undone
+// and redone as n_sub fine steps), the others do not; the fine path integrates the same model,
+// so the arm ends where the unforced run does, to within the macro step's own error.
+static void test_step__refine_every_forces_the_fine_path_on_every_nth_step(void **state) {
+  (void)state;
+  const char *const ov[] = {"simulation.refine_every=4", NULL};
+  urt_model_t *mf = urt_test_model(ov);
+  urt_model_t *m = urt_test_model(NULL);
+  assert_int_equal(m->refine_every, 0);
+  assert_int_equal(mf->refine_every, 4);
+  urt_data_t *df = new_data(mf), *d = new_data(m);
+  urt_command_t c;
+  for (int k = 0; k < 2000; k++) {
+    sine_command(m, d->t, &c);
+    urt_command_set(m, d, &c);
+    urt_command_set(mf, df, &c);
+    assert_int_equal(urt_step(m, d), URT_OK);
+    assert_int_equal(urt_step(mf, df), URT_OK);
+    assert_int_equal(df->refined_count, (k + 1) / 4);
+  }
+  assert_int_equal(d->refined_count, 0);
+  double worst = 0.0;
+  for (int j = 0; j < URT_NJ; j++) {
+    worst = fmax(worst, fabs(df->x[j][URT_X_Q] - d->x[j][URT_X_Q]));
+  }
+  print_message("|q_forced - q| after 0.1 s: %.3g rad\n", worst);
+  assert_true(worst > 0.0);   // the fine path ran: its rounding differs
+  assert_true(worst < 1e-5);  // and it integrates the same model
+  free(df);
+  free(d);
+  urt_model_free(mf);
+  urt_model_free(m);
+}
+
 // With sub-stepping switched off and model.md's steeper wrist Stribeck dip (k_q = 10), wrist 3
 // is unstable at 50 µs: urt_step must first redo implausible steps as fine steps, and when that
 // cannot save the state, stop with a finite state instead of diverging.
@@ -308,6 +342,7 @@ int main(void) {
       cmocka_unit_test(test_step__settled_current_equals_gravity_over_kt_ratio_without_friction),
       cmocka_unit_test(test_step__released_arm_conserves_energy_for_10_s),
       cmocka_unit_test(test_step__noisy_excitations_at_10_and_20_khz_never_stop),
+      cmocka_unit_test(test_step__refine_every_forces_the_fine_path_on_every_nth_step),
       cmocka_unit_test(test_step__unstable_settings_end_in_a_protective_stop_not_in_nan),
   };
   return cmocka_run_group_tests_name("core/step", tests, NULL, NULL);

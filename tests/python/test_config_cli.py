@@ -116,7 +116,7 @@ def test_json_joints_carry_every_block_and_the_derived_values(resolved_json):
                                                                   3.10]
     sim = resolved_json["simulation"]
     assert sim == {"dt": 5e-5, "seed": 1, "drives_engaged": True, "substep_h_max": 5e-6,
-                   "substep_ratio": 0.015}
+                   "substep_ratio": 0.015, "refine_every": 0}
     assert resolved_json["units"]["joints[].motor.kt"] == "N m/A"
     assert "joints[].control.i_max" in resolved_json["derived"]
     assert "joints[].motor.kt" not in resolved_json["derived"]

@@ -103,6 +103,9 @@ typedef struct urt_model {
   double substep_ratio;    /* sub-step a joint when dt·|g'_min|/J_out exceeds this [-] */
   uint64_t seed;           /* sensor-noise RNG seed                     */
   int drives_engaged;      /* 0: joints free (drive torque T_CS = 0)     */
+  uint32_t refine_every;   /* redo every N-th step as fine steps whatever its plausibility
+                              (0: only implausible ones): a knob for measuring the cost of
+                              the refined path, which healthy runs rarely take          */
 
   /* arm */
   urt_arm_params_t arm;
