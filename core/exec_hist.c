@@ -48,6 +48,17 @@ uint64_t urt_exec_hist_count(const urt_exec_hist_t *h) {
   return atomic_load_explicit(&h->count, memory_order_relaxed);
 }
 
+uint64_t urt_exec_hist_count_from(const urt_exec_hist_t *h, double s) {
+  uint64_t n = 0;
+  double ns = s * 1e9;
+  int from = ns <= 0.0 ? 0 : ns >= 18446744073709549568.0 ? URT_EXEC_HIST_BINS - 1
+                                                          : bin_of((uint64_t)ns);
+  for (int b = from; b < URT_EXEC_HIST_BINS; b++) {
+    n += atomic_load_explicit(&h->bin[b], memory_order_relaxed);
+  }
+  return n;
+}
+
 double urt_exec_hist_quantile(const urt_exec_hist_t *h, double q) {
   uint64_t bins[URT_EXEC_HIST_BINS], total = 0;
   for (int b = 0; b < URT_EXEC_HIST_BINS; b++) {

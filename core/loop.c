@@ -330,6 +330,9 @@ void urt_loop_get_stats(const urt_loop_t *l, urt_loop_stats_t *out) {
   out->cpu_p999 = urt_exec_hist_quantile(&l->cpu_hist, 0.999);
   out->cpu_max = urt_exec_hist_max(&l->cpu_hist);
   out->refined_steps = atomic_load_explicit(&l->refined_steps, memory_order_relaxed);
+  out->exec_over_half = urt_exec_hist_count_from(&l->exec_hist, 0.5 * l->cfg.period);
+  out->cpu_over_half = urt_exec_hist_count_from(&l->cpu_hist, 0.5 * l->cfg.period);
+  out->exec_periods = urt_exec_hist_count(&l->exec_hist);
 }
 
 //---- the physics thread ----

@@ -90,11 +90,13 @@ void print_exec_stats(const urt_loop_stats_t& s, double period) {
   std::fprintf(stderr,
                "urtwin: physics per period: wall p50 %.0f us p99 %.0f us p99.9 %.0f us max %.0f us "
                "(max %.1f %% of %.0f us); cpu p50 %.0f us p99 %.0f us p99.9 %.0f us max %.0f us "
-               "(max %.1f %%); refined steps %llu\n",
+               "(max %.1f %%); refined steps %llu; periods at half the period or more: wall "
+               "%llu cpu %llu of %llu\n",
                s.exec_p50 * 1e6, s.exec_p99 * 1e6, s.exec_p999 * 1e6, s.exec_max * 1e6,
                100.0 * s.exec_max / period, period * 1e6, s.cpu_p50 * 1e6, s.cpu_p99 * 1e6,
                s.cpu_p999 * 1e6, s.cpu_max * 1e6, 100.0 * s.cpu_max / period,
-               (unsigned long long)s.refined_steps);
+               (unsigned long long)s.refined_steps, (unsigned long long)s.exec_over_half,
+               (unsigned long long)s.cpu_over_half, (unsigned long long)s.exec_periods);
 }
 
 // Raise the soft descriptor limit to the hard one: the caps, not a distribution's default of

@@ -68,9 +68,30 @@ static void test_exec_hist__an_enormous_duration_is_counted_not_lost(void **stat
   free(h);
 }
 
+// count_from(s) counts every sample >= s and none below s·(1 − 1/16): 1 ms of a 2 ms period.
+static void test_exec_hist__count_from_counts_what_reached_a_threshold(void **state) {
+  (void)state;
+  urt_exec_hist_t *h = fresh();
+  const uint64_t below[] = {200000, 500000, 900000, 936000};  // < 1 ms · (1 − 1/16) = 937.5 µs
+  const uint64_t above[] = {1000000, 1000001, 1300000, 4000000, 40000000000ull};
+  for (int k = 0; k < 1000; k++) {
+    urt_exec_hist_add(h, below[k % 4]);
+  }
+  for (size_t k = 0; k < sizeof above / sizeof above[0]; k++) {
+    urt_exec_hist_add(h, above[k]);
+  }
+  assert_int_equal(urt_exec_hist_count_from(h, 1e-3), 5);
+  assert_int_equal(urt_exec_hist_count_from(h, 0.0), 1005);
+  assert_int_equal(urt_exec_hist_count_from(h, 1e3), 1);  // the last bin holds the enormous one
+  uint64_t near = urt_exec_hist_count_from(h, 999e-6);  // 999 µs: the 1 ms samples' bin
+  assert_int_equal(near, 5);
+  free(h);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_exec_hist__empty_reports_zero),
+      cmocka_unit_test(test_exec_hist__count_from_counts_what_reached_a_threshold),
       cmocka_unit_test(test_exec_hist__quantiles_bound_the_true_value_within_one_bin),
       cmocka_unit_test(test_exec_hist__an_enormous_duration_is_counted_not_lost),
   };

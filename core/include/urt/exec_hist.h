@@ -35,6 +35,9 @@ void urt_exec_hist_add(urt_exec_hist_t *h, uint64_t ns);
  * never above the maximum; 0 when nothing was counted. Any thread. */
 double urt_exec_hist_quantile(const urt_exec_hist_t *h, double q);
 
+/* How many samples lie in the bin holding s [s] or above: every sample >= s, and none below
+ * s·(1 − 1/16) (64 ns below 1.024 µs). Any thread. */
+uint64_t urt_exec_hist_count_from(const urt_exec_hist_t *h, double s);
 /* The largest duration counted [s] and the number of samples. Any thread. */
 double urt_exec_hist_max(const urt_exec_hist_t *h);
 uint64_t urt_exec_hist_count(const urt_exec_hist_t *h);

@@ -137,6 +137,9 @@ typedef struct urt_loop_stats {
   double exec_p50, exec_p99, exec_p999;
   double cpu_p50, cpu_p99, cpu_p999, cpu_max;
   uint64_t refined_steps;       /* physics steps redone as sub-steps (urt_step) */
+  /* periods whose wall / CPU time reached half the period (urt_exec_hist_count_from): how often
+   * the worst case happened, where the maximum says only how bad it was once */
+  uint64_t exec_over_half, cpu_over_half, exec_periods;
 } urt_loop_stats_t;
 void urt_loop_get_stats(const urt_loop_t *l, urt_loop_stats_t *out);
 
