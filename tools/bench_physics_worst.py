@@ -10,8 +10,11 @@ each (default 20): once idle, once under what costs the physics thread most:
   - RTDE inputs at 10 kHz from another process (tests/python/rtde_input_client.py) and
     dashboard queries as fast as they are answered (every command goes through the rings the
     physics thread drains),
-  - the stick-slip at each movel reversal, which makes urt_step redo steps as sub-steps
-    (counted: "refined steps").
+  - a refined step (urt_step's path for an implausible step: the macro step undone and redone
+    as n_sub fine steps, about 11 steps' work) in every controller period. Healthy runs take
+    that path rarely or never (session 13's loaded runs: 0), so it is forced with
+    simulation.refine_every=40 (every 40th of the 20 kHz steps: one per 2 ms period; counted:
+    "refined steps").
 It then reads the emulator's own figures at its exit (urtwin prints the per-period quantiles of
 its physics thread, wall clock and thread CPU time: core/exec_hist.h) and reports p50/p99/
 p99.9/max, each also as a share of the 2 ms period. The wall figures include the time another
@@ -53,10 +56,14 @@ MOVEL_LOOP = """def bench_movel():
 end
 """
 
+# one forced refined step per 2 ms controller period at 20 kHz (config/README.md)
+REFINE_EVERY = 40
+
 LINE = re.compile(
     r"physics per period: wall p50 (\d+) us p99 (\d+) us p99\.9 (\d+) us max (\d+) us "
     r"\(max [\d.]+ % of (\d+) us\); cpu p50 (\d+) us p99 (\d+) us p99\.9 (\d+) us max (\d+) us "
-    r"\(max [\d.]+ %\); refined steps (\d+)")
+    r"\(max [\d.]+ %\); refined steps (\d+); periods at half the period or more: wall (\d+) "
+    r"cpu (\d+) of (\d+)")
 
 
 def wait_port(host, port, timeout=5.0):
@@ -95,14 +102,26 @@ def tcp_x_travel(host, stop, out):
     out.append(hi - lo)
 
 
+def steal_seconds():
+    """The machine's stolen time so far (/proc/stat: time the hypervisor ran something else
+    while a vCPU had work), summed over CPUs [s]; None where it is not reported."""
+    try:
+        fields = Path("/proc/stat").read_text().split("\n", 1)[0].split()
+        return int(fields[8]) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        return None
+
+
 def run_once(build, host, seconds, loaded, rt):
     emu = subprocess.Popen(
         [str(build / "tools" / "urtwin"), "--config", str(ROOT / "config" / "ur5.yaml"),
          "--bind", host, "--pacing", "tick", "--rate", "20000", "--stats-every", "0"]
+        + (["--set", f"simulation.refine_every={REFINE_EVERY}"] if loaded else [])
         + (["--rt-priority", "80", "--lock-memory"] if rt else []),
         stderr=subprocess.PIPE, text=True)
     flood = None
     answered = 0
+    steal0 = steal_seconds()
     try:
         if not all(wait_port(host, p) for p in (29999, 30002, 30004)):
             raise RuntimeError("urtwin did not open its ports")
@@ -130,6 +149,7 @@ def run_once(build, host, seconds, loaded, rt):
         except subprocess.TimeoutExpired:
             emu.kill()
             _, err = emu.communicate()
+    steal1 = steal_seconds()
     m = LINE.findall(err)
     if not m:
         raise RuntimeError("urtwin printed no per-period figures:\n" + err[-2000:])
@@ -138,7 +158,9 @@ def run_once(build, host, seconds, loaded, rt):
     res = {"period_us": period_us,
            "wall_us": dict(zip(("p50", "p99", "p999", "max"), v[0:4])),
            "cpu_us": dict(zip(("p50", "p99", "p999", "max"), v[5:9])),
-           "refined_steps": v[9], "tcp_x_travel_m": travel[0] if travel else None}
+           "refined_steps": v[9], "tcp_x_travel_m": travel[0] if travel else None,
+           "periods": v[12], "wall_over_half": v[10], "cpu_over_half": v[11],
+           "steal_s": None if steal0 is None or steal1 is None else steal1 - steal0}
     res["wall_share"] = {k: x / period_us for k, x in res["wall_us"].items()}
     res["cpu_share"] = {k: x / period_us for k, x in res["cpu_us"].items()}
     if loaded:
@@ -168,6 +190,7 @@ def main(argv=None):
         r = run_once(build, a.host, a.seconds, loaded, rt_case)
         results[name] = r
         extra = ""
+        stolen = "n/a" if r["steal_s"] is None else f"{r['steal_s']:.2f} s"
         if loaded:
             extra = (f"; RTDE inputs {r['rtde_inputs_per_s']:.0f}/s, dashboard "
                      f"{r['dashboard_answered']} answered")
@@ -176,7 +199,9 @@ def main(argv=None):
               f"max {r['cpu_us']['max']} us (max {100 * r['cpu_share']['max']:.1f} %); "
               f"wall p99 {r['wall_us']['p99']} max {r['wall_us']['max']} us "
               f"(max {100 * r['wall_share']['max']:.1f} %); refined steps "
-              f"{r['refined_steps']}; TCP x travel {r['tcp_x_travel_m']:.3f} m{extra}")
+              f"{r['refined_steps']}; periods at >= 50 %: wall {r['wall_over_half']} cpu "
+              f"{r['cpu_over_half']} of {r['periods']}; TCP x travel "
+              f"{r['tcp_x_travel_m']:.3f} m; stolen {stolen}{extra}")
         for e in r.get("script_errors") or []:
             print(f"[{name}] {e}")
     print(f"load average during the runs: {results['load_average'][0]:.1f}")
