@@ -627,7 +627,10 @@ def main(argv=None):
     bar = tqdm(total=total, initial=total - len(todo), unit="run", disable=a.quiet,
                desc=s["name"])
     stats, failed = [], []
+    # the sweep's wall time starts when its runs can start: a local Ray's start-up (seconds,
+    # whatever the sweep's size) is reported beside it, not spread over the runs
     wall0 = time.perf_counter()
+    ray_start = 0.0
     if a.no_ray:
         for rid, t, p, seed, case in todo:
             try:
@@ -655,6 +658,8 @@ def main(argv=None):
                      **init)
         else:
             ray.init(num_cpus=a.workers, _node_ip_address="127.0.0.1", **init)
+        ray_start = time.perf_counter() - wall0
+        wall0 += ray_start
         try:
             task = ray.remote(num_cpus=1, max_retries=0)(run_one)
             pending, queue = {}, list(todo)
@@ -684,7 +689,7 @@ def main(argv=None):
         sim = sum(x[1] for x in stats)
         summary = {
             "runs": len(stats), "already_done": total - len(todo), "workers": a.workers,
-            "ray": not a.no_ray, "simulated_s": sim, "wall_s": wall,
+            "ray": not a.no_ray, "ray_start_s": ray_start, "simulated_s": sim, "wall_s": wall,
             "sim_per_wall": sim / wall,
             "sim_per_loop_wall": sim / sum(x[2] for x in stats),
             "sim_per_loop_cpu": sim / sum(x[3] for x in stats),
@@ -699,7 +704,8 @@ def main(argv=None):
                   f"simulated in {wall:.3g} s wall: {summary['sim_per_wall']:.3g} sim s per "
                   f"wall s overall; per worker {summary['sim_per_run_wall']:.3g} per wall s "
                   f"({summary['sim_per_run_cpu']:.3g} per CPU s) for whole runs, "
-                  f"{summary['sim_per_loop_cpu']:.3g} per CPU s in the stepping loops")
+                  f"{summary['sim_per_loop_cpu']:.3g} per CPU s in the stepping loops"
+                  + (f"; Ray's start-up {ray_start:.3g} s before" if not a.no_ray else ""))
     return 0
 
 
