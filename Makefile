@@ -11,7 +11,9 @@
 #               DDS off vs on with 8 subscribers: latency tick -> subscriber, overruns (bench_dds.json),
 #               the physics thread's time per period idle and under movel + a command flood
 #               (bench_physics_worst.json), the URScript VM's cost per tick running URCL's
-#               script in SERVOJ mode beside the physics' overruns (bench_urcl_vm.json; needs URCL)
+#               script in SERVOJ mode beside the physics' overruns (bench_urcl_vm.json; needs URCL),
+#               a dataset sweep on 1 and 2 Ray workers against the bare urt_step rate
+#               (bench_dataset.json)
 
 SHELL := /bin/bash
 JOBS ?= $(shell nproc)
@@ -173,6 +175,7 @@ bench: build urcl
 	URT_BUILD=$(abspath build) $(PY) tools/bench_dds.py --out build/bench_dds.json
 	URT_BUILD=$(abspath build) $(PY) tools/bench_physics_worst.py --out build/bench_physics_worst.json
 	URT_BUILD=$(abspath build) $(PY) tools/bench_urcl_vm.py --out build/bench_urcl_vm.json
+	URT_BUILD=$(abspath build) $(PY) tools/bench_dataset.py --out build/bench_dataset.json
 
 # the full 10 s excitation comparison against CVODE, noise off, at 20 and 10 kHz (slow: about
 # 7 minutes each on one core)
