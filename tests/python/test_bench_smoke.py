@@ -153,3 +153,31 @@ def test_bench_physics_worst__reports_ordered_figures_and_the_motion_ran(tmp_pat
         assert loaded["tcp_x_travel_m"] > 0.05  # movel moved the TCP (0.15 m per leg)
         assert loaded["rtde_inputs_per_s"] > 1000 and loaded["dashboard_answered"] > 0
         assert res["idle" + suffix]["tcp_x_travel_m"] < 1e-3
+        # one forced refined step per period (simulation.refine_every=40 at 20 kHz), none idle
+        assert loaded["refined_steps"] >= 0.9 * loaded["periods"] > 0
+        assert res["idle" + suffix]["refined_steps"] == 0
+    for name in names:
+        r = res[name]
+        assert 0 <= r["wall_over_half"] <= r["periods"] and 0 <= r["cpu_over_half"] <= r["periods"]
+
+
+def test_bench_dataset__reports_both_worker_counts_and_the_bare_rate(tmp_path):
+    """tools/bench_dataset.py --quick: a sweep on 1 and on 2 Ray workers (in a loopback-only
+    network namespace) and urt_step's bare rate, each positive; the ratios are derived from
+    them."""
+    out = tmp_path / "dataset.json"
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "tools" / "bench_dataset.py"), "--quick", "--out", str(out)],
+        capture_output=True, text=True, cwd=ROOT, timeout=600,
+        env={**os.environ, "URT_BUILD": str(BUILD)})
+    assert proc.returncode == 0, proc.stderr + proc.stdout
+    res = json.loads(out.read_text())
+    assert res["bare_urt_step_rtf"] > 0
+    for w in (1, 2):
+        t = res[f"workers_{w}"]
+        assert t["workers"] == w and t["ray"] and t["runs"] == 4
+        assert t["simulated_s"] == pytest.approx(4.0)
+        assert t["wall_s"] > 0 and t["ray_start_s"] > 0
+    assert res["scaling_2_over_1"] == pytest.approx(
+        res["workers_2"]["sim_per_wall"] / res["workers_1"]["sim_per_wall"])
+    assert "2 workers / 1 worker" in proc.stdout
