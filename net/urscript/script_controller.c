@@ -130,12 +130,22 @@ int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, cons
 
 /* t seconds of motion time (script_vm.h): the tick's own scaling (snapshot_at), the newest
  * snapshot's when that tick has left the history; ends, as the controller's speedj, at the
- * first tick whose sum reaches t (less a millionth of a period, as urt__us_wait_for) */
+ * first tick whose sum reaches t (less a millionth of a period, as urt__us_wait_for), after
+ * at least one tick when t > 0.
+ * A stream of them (the next starts in the tick the last ended, as URCL's spline runs one
+ * speedj(qd, a, steptime) per step) keeps its motion time: what a wait ran past its t counts
+ * toward the next. Without that, at a slider s whose 1/s is not whole every speedj lasted
+ * ceil(1/s) ticks at s·qd: at s = 0.33, 4 ticks and 1.32 times its joint distance, and
+ * URCL's 3 s spline to a pose ended 0.50 rad beyond it. The next command supersedes the
+ * controller's speedj while that still runs (core/motion_speedj.cpp ends it by its own t). */
 int urt__us_wait_scaled(vm *V, const us_node *at, double t, const char *what) {
   const urt_script_host_t *h = V->h->host;
   double period = urt__us_snap(V)->period > 0 ? V->snap.period : 0.002;
-  double tau = 0.0;
-  while (tau < t - 1e-6 * period) {
+  double tau = V->motion_carry_tick == V->tick ? V->motion_carry : 0.0;
+  V->motion_carry = 0.0;
+  bool must_tick = t > 1e-6 * period;
+  while (must_tick || tau < t - 1e-6 * period) {
+    must_tick = false;
     if (urt__us_wait_tick(V, at) != X_OK) {
       return X_ERR;
     }
@@ -151,5 +161,7 @@ int urt__us_wait_scaled(vm *V, const us_node *at, double t, const char *what) {
     }
     tau += scale * period;
   }
+  V->motion_carry = tau > t ? tau - t : 0.0;
+  V->motion_carry_tick = V->tick;
   return X_OK;
 }

@@ -112,6 +112,10 @@ typedef struct vm {
   size_t *var_bytes; /* shared: heap held by variables (bounded by MAX_VAR_BYTES) */
   /* time: the controller tick the scheduler is running (every thread sees the same) */
   uint64_t tick;
+  /* motion time the last scaled wait ran past its t, and the tick it ended at: a wait that
+   * starts in that same tick continues the stream (urt__us_wait_scaled) */
+  double motion_carry;
+  uint64_t motion_carry_tick;
   int64_t steps;    /* steps since this thread last yielded */
   urt_snapshot_t snap;
 } vm;

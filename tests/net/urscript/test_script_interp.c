@@ -128,6 +128,23 @@ static void test_interp__speedj_t_is_motion_time_under_the_slider(void **state) 
   assert_int_equal(R.f.s.tick, 204);
 }
 
+/* a stream of speedj keeps its motion time: at 0.33, 99 speedj(qd, a, 0.002) take 300 ticks
+ * (99 / 0.33), not 99 · ceil(1 / 0.33) = 396 (each at 0.33·qd: 1.32 times the distance);
+ * a pause between them (sync) starts the next one afresh */
+static void test_interp__a_speedj_stream_keeps_its_motion_time_under_the_slider(void **state) {
+  R.f.s.speed_scaling = 0.33;
+  R.f.s.motion_rate = 0.33;
+  must_run("i = 0\nwhile i < 99:\n  speedj([0.1, 0, 0, 0, 0, 0], 0.5, 0.002)\n  i = i + 1\nend\n");
+  assert_int_equal(R.f.n_cmd, 99);
+  print_message("99 speedj at 0.33: %llu ticks\n", (unsigned long long)R.f.s.tick);
+  assert_true(R.f.s.tick >= 300 && R.f.s.tick <= 301);
+  setup(NULL);
+  R.f.s.speed_scaling = 0.33;
+  R.f.s.motion_rate = 0.33;
+  must_run("speedj([0.1, 0, 0, 0, 0, 0], 0.5, 0.002)\nsync()\nspeedj([0.1, 0, 0, 0, 0, 0], 0.5, 0.002)\n");
+  assert_int_equal(R.f.s.tick, 4 + 1 + 4);
+}
+
 static void test_interp__stopj_and_stopl(void **state) {
   must_run("stopj(2)\nstopl(10)\n");
   assert_int_equal(R.f.cmd[0].kind, URT_CTRL_STOPJ);
@@ -396,6 +413,7 @@ int main(void) {
       cmocka_unit_test_setup(test_interp__servoj_blocks_t_and_maps_arguments, setup),
       cmocka_unit_test_setup(test_interp__speedj_with_t_blocks_t, setup),
       cmocka_unit_test_setup(test_interp__speedj_t_is_motion_time_under_the_slider, setup),
+      cmocka_unit_test_setup(test_interp__a_speedj_stream_keeps_its_motion_time_under_the_slider, setup),
       cmocka_unit_test_setup(test_interp__stopj_and_stopl, setup),
       cmocka_unit_test_setup(test_interp__sleep_counts_controller_ticks, setup),
       cmocka_unit_test_setup(test_interp__io_and_settings, setup),
