@@ -97,6 +97,92 @@ struct Reader {
   }
 };
 
+
+// the gap this client saw is a lower bound of the gap between its writes' arrivals, which also
+// wait for its processing and the socket (a tick or two): within 2 ticks of the timeout the
+// controller's timeout is the client's doing
+bool held_back(double max_gap, unsigned timeout_ms, double rate) {
+  return max_gap >= 1e-3 * timeout_ms - 2.0 / rate - 1e-9;
+}
+
+// after a program ended by its receive timeout: send it again and wait until it plays and the
+// reverse socket is back, as the driver's resend_robot_program service does
+void resend_program(UrDriver &driver, Reader &rd, const char *phase) {
+  if (!driver.sendRobotProgram()) {
+    fail(std::string(phase) + ": the program could not be resent");
+  }
+  const auto t_resend = Clock::now();
+  while (!(rd.read() && rd.runtime_state == kPlaying && g_program_running.load() &&
+           driver.isReverseInterfaceConnected())) {
+    if (seconds_since(t_resend) > 15.0) {
+      fail(std::string(phase) + ": the resent program did not connect within 15 s");
+    }
+  }
+}
+
+struct Phase {
+  bool dropped = false;   // the program left PLAYING, or a write failed
+  double max_gap = 0.0;   // the largest gap between two packages this client read [s]
+  int result = -2;        // URCL's trajectory result (-2: none)
+  double took = 0.0;      // controller time from the points' sending to the result [s]
+  double end_err = 0.0;   // max |q - last point| after 0.5 s of settling [rad]
+};
+
+// One attempt of the spline phase: 3 points from where the arm is, forwarded on 50003, then
+// FORWARD NOOPs with the passthrough controller's timeout until the result and 0.5 s after it
+// (the arm settling on the last point).
+Phase spline_phase(UrDriver &driver, Reader &rd, unsigned timeout_ms) {
+  Phase ph;
+  while (!rd.read()) {
+  }
+  const vector6d_t start = rd.q;
+  std::vector<vector6d_t> pts(3, start), vel(3, vector6d_t{0, 0, 0, 0, 0, 0});
+  pts[0][5] = start[5] + 0.10;
+  vel[0][5] = 0.10;
+  pts[1][5] = start[5] + 0.20;
+  vel[1][5] = 0.05;
+  pts[2][5] = start[5] + 0.25;  // ends at rest
+  pts[2][0] = start[0] - 0.05;
+  const double dt[3] = {1.0, 1.0, 1.0};
+  g_trajectory_result = -2;
+  const int drops_before = g_program_drops.load();
+  if (!driver.writeTrajectoryControlMessage(control::TrajectoryControlMessage::TRAJECTORY_START, 3,
+                                            RobotReceiveTimeout::millisec(timeout_ms))) {
+    fail("trajectory: TRAJECTORY_START");
+  }
+  for (int k = 0; k < 3; k++) {
+    if (!driver.writeTrajectorySplinePoint(pts[k], vel[k], static_cast<float>(dt[k]))) {
+      fail("trajectory: a spline point could not be written on 50003");
+    }
+  }
+  const double ts_traj = rd.timestamp;
+  double last_ts = rd.timestamp, ts_done = -1.0;
+  while (ts_done < 0.0 || rd.timestamp - ts_done < 0.5) {
+    if (rd.read()) {
+      ph.max_gap = std::max(ph.max_gap, rd.timestamp - last_ts);
+      last_ts = rd.timestamp;
+      if (rd.runtime_state != kPlaying || g_program_drops.load() != drops_before ||
+          !driver.writeTrajectoryControlMessage(control::TrajectoryControlMessage::TRAJECTORY_NOOP,
+                                                -1, RobotReceiveTimeout::millisec(timeout_ms))) {
+        ph.dropped = true;
+        return ph;
+      }
+    }
+    if (ts_done < 0.0 && g_trajectory_result.load() != -2) {
+      ts_done = rd.timestamp;
+      ph.took = ts_done - ts_traj;
+    }
+    if (rd.timestamp - ts_traj > 15.0) {
+      fail("trajectory: no result within 15 s of controller time");
+    }
+  }
+  ph.result = g_trajectory_result.load();
+  for (int j = 0; j < 6; j++) {
+    ph.end_err = std::max(ph.end_err, std::fabs(rd.q[j] - pts[2][j]));
+  }
+  return ph;
+}
+
 }  // namespace
 
 int main(int argc, char *argv[]) {
@@ -207,10 +293,7 @@ int main(int argc, char *argv[]) {
     if (!dropped) {
       break;
     }
-    // the gap this client saw is a lower bound of the gap between its writes' arrivals, which
-    // also wait for its processing and the socket (a tick or two): within 2 ticks of the
-    // timeout the controller's timeout is the client's doing
-    if (max_gap < 1e-3 * timeout_ms - 2.0 / rate - 1e-9) {
+    if (!held_back(max_gap, timeout_ms, rate)) {
       fail("servo phase: the program stopped although every package came well within the timeout");
     }
     if (attempt == kAttempts) {
@@ -219,16 +302,7 @@ int main(int argc, char *argv[]) {
     std::printf("servo (attempt %d): this client went %.1f ms without a package, past the %u ms "
                 "receive timeout: the program ended as on a controller; resending it\n",
                 attempt, 1e3 * max_gap, timeout_ms);
-    if (!driver.sendRobotProgram()) {
-      fail("servo phase: the program could not be resent");
-    }
-    const auto t_resend = Clock::now();
-    while (!(rd.read() && rd.runtime_state == kPlaying && g_program_running.load() &&
-             driver.isReverseInterfaceConnected())) {
-      if (seconds_since(t_resend) > 15.0) {
-        fail("servo phase: the resent program did not connect within 15 s");
-      }
-    }
+    resend_program(driver, rd, "servo phase");
   }
   // Tracking (issue 9: asserted, not printed): the arm follows the commanded sine one lookahead
   // time late (servoj's lookahead 0.03 s, plus the tick that carries the command), and what is
@@ -263,61 +337,38 @@ int main(int argc, char *argv[]) {
   }
 
   // ---- 2. a 3-point cubic spline on the trajectory socket, as the passthrough controller -----
-  // back to the sine's centre first (the spline starts where the arm is)
-  while (!rd.read()) {
-  }
-  const vector6d_t start = rd.q;
-  std::vector<vector6d_t> pts(3, start), vel(3, vector6d_t{0, 0, 0, 0, 0, 0});
-  pts[0][5] = start[5] + 0.10;
-  vel[0][5] = 0.10;
-  pts[1][5] = start[5] + 0.20;
-  vel[1][5] = 0.05;
-  pts[2][5] = start[5] + 0.25;  // ends at rest
-  pts[2][0] = start[0] - 0.05;
-  const double dt[3] = {1.0, 1.0, 1.0};
-  if (!driver.writeTrajectoryControlMessage(control::TrajectoryControlMessage::TRAJECTORY_START, 3,
-                                            RobotReceiveTimeout::millisec(timeout_ms))) {
-    fail("trajectory: TRAJECTORY_START");
-  }
-  for (int k = 0; k < 3; k++) {
-    if (!driver.writeTrajectorySplinePoint(pts[k], vel[k], static_cast<float>(dt[k]))) {
-      fail("trajectory: a spline point could not be written on 50003");
+  // The same rule as the servo phase: an attempt whose program ended because this client went
+  // about the receive timeout without a package is started again with the program resent.
+  for (int attempt = 1;; attempt++) {
+    const Phase phase = spline_phase(driver, rd, timeout_ms);
+    std::printf("trajectory (attempt %d): result %s after %.3f s of controller time (points at "
+                "1, 2, 3 s), end error %.2e rad, largest package gap %.1f ms, program %s\n",
+                attempt,
+                phase.result == -2 ? "none"
+                                   : control::trajectoryResultToString(
+                                         static_cast<control::TrajectoryResult>(phase.result))
+                                         .c_str(),
+                phase.took, phase.end_err, 1e3 * phase.max_gap,
+                phase.dropped ? "stopped" : "played throughout");
+    if (!phase.dropped) {
+      if (phase.result != static_cast<int>(control::TrajectoryResult::TRAJECTORY_RESULT_SUCCESS)) {
+        fail("trajectory: the result is not TRAJECTORY_RESULT_SUCCESS");
+      }
+      if (phase.end_err > 1e-3) {
+        fail("trajectory: the arm did not end on the last point");
+      }
+      break;
     }
-  }
-  const double ts_traj = rd.timestamp;
-  while (g_trajectory_result.load() == -2) {
-    if (rd.read() &&
-        !driver.writeTrajectoryControlMessage(control::TrajectoryControlMessage::TRAJECTORY_NOOP,
-                                              -1, RobotReceiveTimeout::millisec(timeout_ms))) {
-      fail("trajectory: a NOOP could not be written");
+    if (!held_back(phase.max_gap, timeout_ms, rate)) {
+      fail("trajectory: the program stopped although every package came well within the timeout");
     }
-    if (rd.timestamp - ts_traj > 15.0) {
-      fail("trajectory: no result within 15 s of controller time");
+    if (attempt == kAttempts) {
+      fail("trajectory: the client was held back past the receive timeout in every attempt");
     }
-  }
-  const double traj_took = rd.timestamp - ts_traj;
-  // let the arm settle on the last point (0.5 s), still in FORWARD with NOOPs
-  const double ts_done = rd.timestamp;
-  while (rd.timestamp - ts_done < 0.5) {
-    if (rd.read()) {
-      driver.writeTrajectoryControlMessage(control::TrajectoryControlMessage::TRAJECTORY_NOOP, -1,
-                                           RobotReceiveTimeout::millisec(timeout_ms));
-    }
-  }
-  double end_err = 0.0;
-  for (int j = 0; j < 6; j++) {
-    end_err = std::max(end_err, std::fabs(rd.q[j] - pts[2][j]));
-  }
-  const int result = g_trajectory_result.load();
-  std::printf("trajectory: result %s after %.3f s of controller time (points at 1, 2, 3 s), end "
-              "error %.2e rad\n",
-              control::trajectoryResultToString(static_cast<control::TrajectoryResult>(result)).c_str(),
-              traj_took, end_err);
-  if (result != static_cast<int>(control::TrajectoryResult::TRAJECTORY_RESULT_SUCCESS)) {
-    fail("trajectory: the result is not TRAJECTORY_RESULT_SUCCESS");
-  }
-  if (end_err > 1e-3) {
-    fail("trajectory: the arm did not end on the last point");
+    std::printf("trajectory (attempt %d): this client went %.1f ms without a package, past the "
+                "%u ms receive timeout: the program ended as on a controller; resending it\n",
+                attempt, 1e3 * phase.max_gap, timeout_ms);
+    resend_program(driver, rd, "trajectory");
   }
 
   // ---- 3. no more writes: the program ends by its receive timeout --------------------------
