@@ -627,10 +627,12 @@ def main(argv=None):
     bar = tqdm(total=total, initial=total - len(todo), unit="run", disable=a.quiet,
                desc=s["name"])
     stats, failed = [], []
-    # the sweep's wall time starts when its runs can start: a local Ray's start-up (seconds,
-    # whatever the sweep's size) is reported beside it, not spread over the runs
+    # the sweep's wall time runs from when its runs can start to when the last one is back: a
+    # local Ray's start-up and shutdown (seconds each, whatever the sweep's size) are reported
+    # beside it, not spread over the runs
     wall0 = time.perf_counter()
-    ray_start = 0.0
+    wall_end = None
+    ray_start = ray_stop = 0.0
     if a.no_ray:
         for rid, t, p, seed, case in todo:
             try:
@@ -675,10 +677,13 @@ def main(argv=None):
                     except Exception as e:   # a run's RuntimeError comes back wrapped
                         failed.append((rid, str(getattr(e, "cause", e)).strip()))
                     bar.update(1)
+            wall_end = time.perf_counter()
         finally:
+            t_stop = time.perf_counter()
             ray.shutdown()
+            ray_stop = time.perf_counter() - t_stop
     bar.close()
-    wall = time.perf_counter() - wall0
+    wall = (wall_end if wall_end is not None else time.perf_counter()) - wall0
 
     for rid, msg in failed:
         print(f"urtwin.dataset: {rid}: {msg}", file=sys.stderr)
@@ -689,7 +694,8 @@ def main(argv=None):
         sim = sum(x[1] for x in stats)
         summary = {
             "runs": len(stats), "already_done": total - len(todo), "workers": a.workers,
-            "ray": not a.no_ray, "ray_start_s": ray_start, "simulated_s": sim, "wall_s": wall,
+            "ray": not a.no_ray, "ray_start_s": ray_start, "ray_stop_s": ray_stop,
+            "simulated_s": sim, "wall_s": wall,
             "sim_per_wall": sim / wall,
             "sim_per_loop_wall": sim / sum(x[2] for x in stats),
             "sim_per_loop_cpu": sim / sum(x[3] for x in stats),
@@ -705,7 +711,8 @@ def main(argv=None):
                   f"wall s overall; per worker {summary['sim_per_run_wall']:.3g} per wall s "
                   f"({summary['sim_per_run_cpu']:.3g} per CPU s) for whole runs, "
                   f"{summary['sim_per_loop_cpu']:.3g} per CPU s in the stepping loops"
-                  + (f"; Ray's start-up {ray_start:.3g} s before" if not a.no_ray else ""))
+                  + (f"; Ray's start-up {ray_start:.3g} s before, its shutdown {ray_stop:.3g} s "
+                     "after" if not a.no_ray else ""))
     return 0
 
 

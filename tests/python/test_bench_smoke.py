@@ -163,8 +163,8 @@ def test_bench_physics_worst__reports_ordered_figures_and_the_motion_ran(tmp_pat
 
 def test_bench_dataset__reports_both_worker_counts_and_the_bare_rate(tmp_path):
     """tools/bench_dataset.py --quick: a sweep on 1 and on 2 Ray workers (in a loopback-only
-    network namespace) and urt_step's bare rate, each positive; the ratios are derived from
-    them."""
+    network namespace) and urt_step's bare rate, each positive, Ray's start-up and shutdown
+    timed apart; the ratios are derived from them."""
     out = tmp_path / "dataset.json"
     proc = subprocess.run(
         [sys.executable, str(ROOT / "tools" / "bench_dataset.py"), "--quick", "--out", str(out)],
@@ -177,7 +177,9 @@ def test_bench_dataset__reports_both_worker_counts_and_the_bare_rate(tmp_path):
         t = res[f"workers_{w}"]
         assert t["workers"] == w and t["ray"] and t["runs"] == 4
         assert t["simulated_s"] == pytest.approx(4.0)
-        assert t["wall_s"] > 0 and t["ray_start_s"] > 0
+        assert t["wall_s"] > 0 and t["ray_start_s"] > 0 and t["ray_stop_s"] > 0
+    assert res["per_worker_over_loops"] == pytest.approx(
+        res["workers_1"]["sim_per_wall"] / res["workers_1"]["sim_per_loop_cpu"])
     assert res["scaling_2_over_1"] == pytest.approx(
         res["workers_2"]["sim_per_wall"] / res["workers_1"]["sim_per_wall"])
     assert "2 workers / 1 worker" in proc.stdout
