@@ -87,7 +87,7 @@ void outputs_drive(const urt_model_t* m, urt_data_t* d) {
 extern "C" void urt_sensors_sample(const urt_model_t* m, urt_data_t* d) {
   // with noise off on every joint the draws change nothing (the held errors ignore them) and
   // nothing else reads the generator, so they are skipped: a noise-free run gives the same bits
-  // as before and no longer pays the 18 Box–Muller normals a step (the model's noise flags
+  // as before and no longer pays the 18 normal draws a step (the model's noise flags
   // are fixed once it is loaded)
   bool any_noise = false;
   for (int j = 0; j < URT_NJ; j++) {

@@ -56,11 +56,10 @@ double urt_sensors_quantise(double x, double lsb);
 double urt_sensors_held_error(double y, double sigma, double n, double lsb, int noise,
                               int quantise);
 
-/* Seeded xoshiro256** generator and a Box–Muller standard normal. Context: RT. */
+/* Seeded xoshiro256** generator and a ziggurat standard normal (drivers/ziggurat_table.h).
+ * Context: RT. */
 typedef struct urt_rng {
   uint64_t s[4];
-  double spare;   /* second Box–Muller value */
-  int has_spare;
 } urt_rng_t;
 void urt_rng_seed(urt_rng_t *r, uint64_t seed);
 uint64_t urt_rng_next(urt_rng_t *r);
