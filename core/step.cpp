@@ -55,28 +55,6 @@ bool step_plausible(const urt_model_t* m, const urt_data_t* d) {
   return true;
 }
 
-// LuGre keeps |z| <= g_max/σ0 = z_max (ż pulls z back wherever σ0|z| exceeds g(q̇)), so a step
-// that carries a bristle state from inside that bound to beyond it has left what the law
-// allows: the macro step's linearisation pumping z at a stick-slip reversal. It is redone as
-// fine steps before the pumping builds over many steps to the implausible 1.5·z_max (wrist 2 at
-// 10 kHz in the replay of a slow start from rest: z rose 1.1 -> 1.58 z_max over 30 steps of a
-// period-3 q̇ cycle, then the step failed). A state that starts beyond the bound (a fault that
-// lowered g) may stay there while it decays.
-bool bristle_left_bound(const urt_model_t* m, const urt_data_t* d, const double (*x0)[URT_NXJ]) {
-  for (int j = 0; j < URT_NJ; j++) {
-    if (!m->friction[j].enabled) {
-      continue;
-    }
-    const double z_max = ((d->faults.joint_mask >> j) & 1u) ? d->faults.joint[j].z_max
-                                                             : m->tables->z_max[j];
-    const double z_new = std::fabs(d->x[j][URT_X_Z]);
-    if (z_new > z_max && z_new > std::fabs(x0[j][URT_X_Z])) {
-      return true;
-    }
-  }
-  return false;
-}
-
 // The command describes a quadratic from the step's start; carry it to the next step's start
 // so that a caller writing commands at a slower rate gets a continuous set-point.
 void command_advance(urt_data_t* d, double h) {
@@ -154,12 +132,11 @@ extern "C" int urt_step(const urt_model_t* m, urt_data_t* d) {
   std::memcpy(x0, d->x, sizeof x0);
   urt::core::integrator_step(m, d, urt::core::kMacro, 0.0);
 
-  // an implausible step, or one that carried a bristle state out of its bound, is redone as
-  // fine steps of the whole model (rare: a few per second of stick-slip; each costs about
-  // n_sub macro steps). simulation.refine_every forces the path on
+  // an implausible step is redone as fine steps of the whole model (rare: a few per second of
+  // stick-slip; each costs about n_sub macro steps). simulation.refine_every forces the path on
   // every N-th step, so that its cost can be measured where healthy runs never take it.
   const bool forced = m->refine_every != 0 && (d->steps + 1) % m->refine_every == 0;
-  if (forced || !step_plausible(m, d) || bristle_left_bound(m, d, x0)) {
+  if (forced || !step_plausible(m, d)) {
     std::memcpy(d->x, x0, sizeof x0);
     const urt_integrator_tables* tab = m->tables;
     for (int k = 0; k < tab->n_sub; k++) {

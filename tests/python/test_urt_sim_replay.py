@@ -296,29 +296,3 @@ def test_replay__logged_time_jitter_and_drift_do_not_reach_the_set_point(tmp_pat
     for j in (1, 2):
         # the same ticks, the same set-point: the same currents
         assert np.array_equal(a[f"twin_current_{j}"], b[f"twin_current_{j}"]), j
-
-
-def shared_recordings():
-    for p in (ROOT.parent / "shared", ROOT.parents[1] / "shared"):
-        d = p / "data" / "ur5-kufieta2014"
-        if d.is_dir():
-            return sorted(d.glob("*.csv"))
-    return []
-
-
-@pytest.mark.parametrize("rate", [10000, 20000])
-def test_replay__every_shared_recording_replays_to_its_end(tmp_path, rate):
-    """The real UR5 recordings of ../shared, each whole at 10 and at 20 kHz (noise off, the
-    paper's parameters): no step fails. At 10 kHz no5_acc_slow's slow start from rest at 11.98 s
-    made wrist 2's bristle state climb past g_max/σ0 in a period-3 stick-slip cycle of the
-    macro step until the step failed at 12.0028 s; such a step is now redone as fine steps
-    (core/step.cpp, bristle_left_bound)."""
-    files = shared_recordings()
-    if not files:
-        pytest.skip("../shared/data/ur5-kufieta2014 absent: the real recordings are not replayed")
-    for f in files:
-        out = tmp_path / f"{f.stem}_{rate}.json"
-        res = sim("--rate", rate, "--replay", f, "--summary-json", out, ok=False)
-        assert res.returncode == 0, f"{f.name} at {rate} Hz: {res.stderr.strip()}"
-        summary = json.loads(out.read_text())
-        assert len(summary["joints"]) == NJ
