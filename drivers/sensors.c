@@ -60,8 +60,11 @@ uint64_t urt_rng_next(urt_rng_t *r) {
   return result;
 }
 
-// uniform in (0, 1): 53 random bits, never exactly 0 so the logarithm below stays finite
-static double uniform(urt_rng_t *r) { return ((urt_rng_next(r) >> 11) + 0.5) * 0x1.0p-53; }
+// the top 53 bits of a draw as a point in (0, 1), never exactly 0 so a logarithm of it stays
+// finite
+static double unit_open(uint64_t u) { return ((double)(u >> 11) + 0.5) * 0x1.0p-53; }
+
+static double uniform(urt_rng_t *r) { return unit_open(urt_rng_next(r)); }
 
 // The ziggurat (Marsaglia and Tsang 2000; layers in ziggurat_table.h): one 64-bit draw picks a
 // layer (bits 0-7), a sign (bit 8) and a point along the layer (bits 11-63, independent of the
@@ -74,7 +77,7 @@ double urt_rng_normal(urt_rng_t *r) {
     const uint64_t u = urt_rng_next(r);
     const int i = (int)(u & 0xff);
     const double sign = (u & 0x100) ? -1.0 : 1.0;
-    const double z = ((double)(u >> 11) + 0.5) * 0x1.0p-53 * urt_zig_x[i];
+    const double z = unit_open(u) * urt_zig_x[i];
     if (z < urt_zig_x[i + 1]) {
       return sign * z;  // inside the layer's rectangle that lies under f everywhere
     }

@@ -109,8 +109,8 @@ def main(argv=None):
     res["loops_over_bare"] = w1["sim_per_loop_cpu"] / rtf
     print(f"ratio: 1 worker's sweep rate / bare urt_step rate = {res['per_worker_over_bare']:.2f}"
           f"; 2 workers' rate per worker / bare = {res['per_worker_over_bare_2']:.2f}"
-          f"; one run while it runs / bare = {res['per_run_over_bare']:.2f} (the rest is Ray's "
-          "task start and the worker's imports; target: within 20 %, not asserted)")
+          f"; one run while it runs / bare = {res['per_run_over_bare']:.2f} (target: within "
+          "20 %, not asserted)")
     print(f"ratio: 1 worker's sweep rate / its own stepping loops' rate = "
           f"{res['per_worker_over_loops']:.2f} (Parquet, model loads, Ray's tasks); the loops / "
           f"bare urt_step = {res['loops_over_bare']:.2f} (these trajectories' physics)")

@@ -97,7 +97,6 @@ struct Reader {
   }
 };
 
-
 // the gap this client saw is a lower bound of the gap between its writes' arrivals, which also
 // wait for its processing and the socket (a tick or two): within 2 ticks of the timeout the
 // controller's timeout is the client's doing
