@@ -303,37 +303,6 @@ int main(int argc, char *argv[]) {
                 attempt, 1e3 * max_gap, timeout_ms);
     resend_program(driver, rd, "servo phase");
   }
-  // Tracking (issue 9: asserted, not printed): the arm follows the commanded sine one lookahead
-  // time late (servoj's lookahead 0.03 s, plus the tick that carries the command), and what is
-  // left after removing that lag is small. The command is a function of the controller time of
-  // the package it answers, so the comparison needs no clock of ours. The first second (the
-  // servo taking hold) is left out.
-  int best_lag = -1;
-  double best_rms = 1e9, best_max = 0.0;
-  const double tick = 1.0 / rate;
-  for (int lag = 0; lag <= 50; lag++) {
-    double sum = 0.0, mx = 0.0;
-    long n = 0;
-    for (size_t k = 0; k < ts_log.size(); k++) {
-      if (ts_log[k] < 1.0) {
-        continue;
-      }
-      const double e = q5_log[k] - sine(q0[5], ts_log[k] - lag * tick);
-      sum += e * e;
-      mx = std::max(mx, std::fabs(e));
-      n++;
-    }
-    const double rms = n > 0 ? std::sqrt(sum / n) : 1e9;
-    if (rms < best_rms) {
-      best_rms = rms, best_max = mx, best_lag = lag;
-    }
-  }
-  const double lag_s = best_lag * tick;
-  std::printf("tracking: lag %.1f ms (lookahead 30 ms), residual rms %.2e max %.2e rad\n",
-              1e3 * lag_s, best_rms, best_max);
-  if (std::fabs(lag_s - cfg.servoj_lookahead_time) > 0.004 + 1e-9 || best_max > 1e-3) {
-    fail("tracking: the lag is not the lookahead time within 4 ms, or the residual exceeds 1e-3 rad");
-  }
 
   // ---- 2. a 3-point cubic spline on the trajectory socket, as the passthrough controller -----
   // The same rule as the servo phase: an attempt whose program ended because this client went
@@ -393,6 +362,40 @@ int main(int argc, char *argv[]) {
               1e3 * (ts_stopped - ts_last_write), timeout_ms);
   if (ts_stopped - ts_last_write < 1e-3 * timeout_ms - 1e-9) {
     fail("stop: the program stopped before its receive timeout ran out");
+  }
+  // Tracking (issue 9: asserted, not printed), judged here at the end: between the servo and
+  // the spline phase the driver keeps writing within its receive timeout, and this fit (51 lags
+  // over 15 000 samples, each a sin) took longer than the 10 ms on this VM, so the program ended
+  // by its timeout before TRAJECTORY_START. The arm follows the commanded sine one lookahead
+  // time late (servoj's lookahead 0.03 s, plus the tick that carries the command), and what is
+  // left after removing that lag is small. The command is a function of the controller time of
+  // the package it answers, so the comparison needs no clock of ours. The first second (the
+  // servo taking hold) is left out.
+  int best_lag = -1;
+  double best_rms = 1e9, best_max = 0.0;
+  const double tick = 1.0 / rate;
+  for (int lag = 0; lag <= 50; lag++) {
+    double sum = 0.0, mx = 0.0;
+    long n = 0;
+    for (size_t k = 0; k < ts_log.size(); k++) {
+      if (ts_log[k] < 1.0) {
+        continue;
+      }
+      const double e = q5_log[k] - sine(q0[5], ts_log[k] - lag * tick);
+      sum += e * e;
+      mx = std::max(mx, std::fabs(e));
+      n++;
+    }
+    const double rms = n > 0 ? std::sqrt(sum / n) : 1e9;
+    if (rms < best_rms) {
+      best_rms = rms, best_max = mx, best_lag = lag;
+    }
+  }
+  const double lag_s = best_lag * tick;
+  std::printf("tracking: lag %.1f ms (lookahead 30 ms), residual rms %.2e max %.2e rad\n",
+              1e3 * lag_s, best_rms, best_max);
+  if (std::fabs(lag_s - cfg.servoj_lookahead_time) > 0.004 + 1e-9 || best_max > 1e-3) {
+    fail("tracking: the lag is not the lookahead time within 4 ms, or the residual exceeds 1e-3 rad");
   }
   std::printf("ros2_driver_pattern: OK\n");
   return 0;
