@@ -774,7 +774,10 @@ def main():
                 cause = (f" [known: {rec['known']}]" if "known" in rec else
                          f" [watched, not gating: {rec['watched'][:100]}]" if "watched" in rec
                          else "")
-                print(f"  {rec['status']:8s} {test_id}{cause}: {rec.get('message', '')[:160]}")
+                # the head says how it ended, the tail what it printed last
+                msg = rec.get("message", "")
+                shown = msg if len(msg) <= 320 else msg[:70] + " ... " + msg[-250:]
+                print(f"  {rec['status']:8s} {test_id}{cause}: {shown}")
                 for line in rec.get("controller_log", []):
                     print(f"           controller log: {line[:150]}")
     print(f"\nwall time of the URCL run: {wall:.0f} s")
