@@ -565,6 +565,9 @@ int main(int argc, char** argv) {
                "over %llu ticks\n",
                es.script_tick.p50 * 1e6, es.script_tick.p99 * 1e6, es.script_tick.p999 * 1e6,
                es.script_tick.max * 1e6, (unsigned long long)es.script_tick.ticks);
+  std::fprintf(stderr, "urtwin: urscript slices taken late: %llu (at most %llu ticks behind)\n",
+               (unsigned long long)es.script_tick.late_slices,
+               (unsigned long long)es.script_tick.late_max);
   urt_loop_stats_t s;
   urt_loop_get_stats(loop, &s);
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",

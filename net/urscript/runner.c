@@ -50,6 +50,7 @@ struct urt_runner {
   uint64_t motion_id;      /* runner thread only                    */
   us_sockets *sockets;     /* the main program's sockets (runner thread only) */
   urt_exec_hist_t tick_cpu;  /* main programs' VM work per tick (runner thread writes) */
+  uint64_t late_slices, late_max;  /* slices taken after their tick had passed (us_hooks) */
   /* the running main program (runner thread only) */
   uint64_t cur_seq, cur_stop;
 };
@@ -175,7 +176,8 @@ static void run_main(urt_runner_t *r, const unit *u) {
   emit_key(r, "PROGRAM_XXX_STARTED", p->name);
   us_hooks h = {.host = &r->host, .sockets = r->sockets, .motion_id = &r->motion_id,
                 .step_budget = r->cfg.step_budget, .wait_timeout_ms = r->cfg.wait_timeout_ms,
-                .poll = poll_main, .poll_ctx = r, .tick_cpu = &r->tick_cpu};
+                .poll = poll_main, .poll_ctx = r, .tick_cpu = &r->tick_cpu,
+                .late_slices = &r->late_slices, .late_max = &r->late_max};
   p->secondary = false;
   if (urt__us_run(p, &h, &e) != 0) {
     report(r, &e, false);
@@ -392,4 +394,6 @@ void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out) 
   out->p999 = urt_exec_hist_quantile(&r->tick_cpu, 0.999);
   out->max = urt_exec_hist_max(&r->tick_cpu);
   out->ticks = urt_exec_hist_count(&r->tick_cpu);
+  out->late_slices = __atomic_load_n(&r->late_slices, __ATOMIC_RELAXED);
+  out->late_max = __atomic_load_n(&r->late_max, __ATOMIC_RELAXED);
 }

@@ -138,6 +138,10 @@ typedef struct us_hooks {
    * every URScript thread's slice and the switches, from the wait's return to the next wait
    * (what `make bench` reports). Single writer: the runner thread. Nullable. */
   urt_exec_hist_t *tick_cpu;
+  /* the slices taken after the controller had already passed their tick, and the most ticks
+   * it was ahead (a runner descheduled: its commands reach a later tick than they were issued
+   * for). Written by the runner thread with relaxed atomic stores. Nullable, both or neither. */
+  uint64_t *late_slices, *late_max;
 } us_hooks;
 
 /* Run a parsed program to its end. Returns 0, or -1 with err filled. Context: the runner

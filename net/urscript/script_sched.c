@@ -380,6 +380,12 @@ static int next_tick(us_sched *S) {
   for (;;) {
     uint64_t t = host->wait_tick(host->ctx, S->tick, S->h->wait_timeout_ms);
     if (t >= want) {
+      if (t > want && S->h->late_slices) {  // the controller already ran past this slice's tick
+        __atomic_store_n(S->h->late_slices, *S->h->late_slices + 1, __ATOMIC_RELAXED);
+        if (t - want > *S->h->late_max) {
+          __atomic_store_n(S->h->late_max, t - want, __ATOMIC_RELAXED);
+        }
+      }
       break;
     }
     if (S->h->poll && S->h->poll(S->h->poll_ctx)) {

@@ -16,6 +16,7 @@ static fake_host F;
 static urt_script_host_t H;
 static uint64_t motion_id;
 static us_err E;
+static uint64_t late_slices, late_max;
 
 static int run_text(const char *text, int64_t budget) {
   us_prog *p = NULL;
@@ -23,7 +24,7 @@ static int run_text(const char *text, int64_t budget) {
     fail_msg("parse: %u:%u %s", E.line, E.column, E.text);
   }
   us_hooks h = {.host = &H, .motion_id = &motion_id, .step_budget = budget ? budget : 100000,
-                .wait_timeout_ms = 1};
+                .wait_timeout_ms = 1, .late_slices = &late_slices, .late_max = &late_max};
   int rc = urt__us_run(p, &h, &E);
   urt__us_prog_free(p);
   return rc;
@@ -38,6 +39,7 @@ static void must_run(const char *text) {
 static int setup(void **state) {
   fake_init(&F, &H);
   motion_id = 0;
+  late_slices = late_max = 0;
   memset(&E, 0, sizeof E);
   return 0;
 }
@@ -120,6 +122,7 @@ static void test_sched__same_stream_however_late_the_runner_is(void **state) {
   uint64_t on_time = stream_hash(&F);
   int n_on_time = F.n_cmd;
   uint64_t ticks_on_time = F.s.tick;
+  assert_int_equal(late_slices, 0);  // on time: no slice taken after its tick
   // again, the controller 1–4 ticks ahead at every wait and the runner descheduled meanwhile
   setup(state);
   F.jump_seed = 12345;
@@ -128,6 +131,9 @@ static void test_sched__same_stream_however_late_the_runner_is(void **state) {
   assert_int_equal(F.n_cmd, n_on_time);
   assert_true(stream_hash(&F) == on_time);
   assert_true(F.s.tick > ticks_on_time);  // the clock really ran ahead of the runner
+  // and the runner counted it: each jump of 1-4 ticks leaves the slices after it late
+  assert_true(late_slices > 0);
+  assert_true(late_max >= 1 && late_max <= 3);  // a jump of 4 ticks leaves the slice 3 behind
 }
 
 static void test_sched__runaway_thread_is_too_much_behind_and_stops_the_program(void **state) {

@@ -140,6 +140,9 @@ void urt_runner_destroy(urt_runner_t *r);
 typedef struct urt_runner_tick_stats {
   double p50, p99, p999, max;
   uint64_t ticks;
+  /* slices the runner took after the controller had passed their tick (descheduled: their
+   * commands reach a later tick), and the most ticks it was behind */
+  uint64_t late_slices, late_max;
 } urt_runner_tick_stats_t;
 void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out);
 
