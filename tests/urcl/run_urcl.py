@@ -247,15 +247,23 @@ class Urtwin:
     def alive(self):
         return self.proc is not None and self.proc.poll() is None
 
+    @staticmethod
+    def dashboard(*queries):
+        """The dashboard's answers to queries, one connection (OSError when it cannot)."""
+        with socket.create_connection((ROBOT_IP, 29999), timeout=2) as s:
+            s.recv(256)  # the banner
+            answers = []
+            for query in queries:
+                s.sendall(query.encode() + b"\n")
+                answers.append(s.recv(256).decode(errors="replace").strip())
+            return answers
+
     def save_log(self):
         """The dashboard's saveLog: the controller log (program messages, runtime errors, safety
         events with a protective stop's causes) lands in logs/controller_log/log_history.txt,
         each line once, so a failed test's program end can be read after the run."""
         try:
-            with socket.create_connection((ROBOT_IP, 29999), timeout=2) as s:
-                s.recv(256)  # the banner
-                s.sendall(b"saveLog\n")
-                s.recv(256)
+            self.dashboard("saveLog")
         except OSError as e:
             print(f"  (controller log not saved: {e})")
 
@@ -286,16 +294,10 @@ class Urtwin:
     def dashboard_state(self):
         """programState, robotmode and safetymode as the dashboard answers them now: whether a
         failed test's program still runs (a hang) or ended (a stop)."""
-        answers = []
         try:
-            with socket.create_connection((ROBOT_IP, 29999), timeout=2) as s:
-                s.recv(256)  # the banner
-                for query in (b"programState\n", b"robotmode\n", b"safetymode\n"):
-                    s.sendall(query)
-                    answers.append(s.recv(256).decode(errors="replace").strip())
+            return "; ".join(self.dashboard("programState", "robotmode", "safetymode"))
         except OSError as e:
-            answers.append(f"dashboard: {e}")
-        return "; ".join(answers)
+            return f"dashboard: {e}"
 
     def stop(self):
         if self.proc is None:
@@ -608,20 +610,18 @@ def run_version(args, name):
                 after(test_id, rec)
             ours = os.path.join(os.path.dirname(os.path.abspath(args.build)), "ours")
             rt = ["chrt", "-f", "50"] if realtime_permitted() else []
-            if any(name in versions and not (filt and not filt.search(f"urtwin/{prog}"))
-                   and not skipped_by_only(f"urtwin/{prog}") for prog, _, _, versions in OURS):
+            ours_run = [(prog, extra, timeout) for prog, extra, timeout, versions in OURS
+                        if name in versions and not (filt and not filt.search(f"urtwin/{prog}"))
+                        and not skipped_by_only(f"urtwin/{prog}")]
+            if ours_run:
                 # the ROS 2 pattern holds a 10 ms receive deadline on a 2-core machine: with
                 # the other version's urtwin and URCL run beside it, this client went 12-20 ms
                 # without a package in every attempt of one gated run (session 16); it waits
                 # here until the other versions are done
                 fcntl.flock(busy, fcntl.LOCK_UN)
                 fcntl.flock(busy, fcntl.LOCK_EX)
-            for prog, extra, timeout, versions in OURS:
+            for prog, extra, timeout in ours_run:
                 test_id = f"urtwin/{prog}"
-                if name not in versions or (filt and not filt.search(test_id)):
-                    continue
-                if skipped_by_only(test_id):
-                    continue
                 after(test_id, run_program([*rt, os.path.join(ours, prog), ROBOT_IP, *extra],
                                            work, timeout,
                                            os.path.join(logs, f"urtwin_{prog}.log")))
