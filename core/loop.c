@@ -63,6 +63,8 @@ struct urt_loop {
   _Atomic int notify_fd;            /* eventfd written after each tick, or -1   */
   atomic_bool notify_busy;          /* the physics thread holds a notify_fd value */
 
+  _Atomic uint64_t program_slice;   /* urt_loop_note_program_slice */
+
   /* lockstep */
   _Atomic uint64_t granted;         /* ticks allowed so far */
   _Atomic uint32_t grant_word;
@@ -304,6 +306,11 @@ uint64_t urt_loop_producer_dropped(const urt_loop_t *l, int producer) {
   return atomic_load_explicit(&l->ring[producer].dropped, memory_order_relaxed);
 }
 
+void urt_loop_note_program_slice(urt_loop_t *l, uint64_t tick) {
+  // release: the slice's commands, pushed before, are in the rings when the physics sees it
+  atomic_store_explicit(&l->program_slice, tick, memory_order_release);
+}
+
 void urt_loop_grant(urt_loop_t *l, uint64_t n) {
   atomic_fetch_add(&l->granted, n);
   atomic_fetch_add(&l->grant_word, 1);
@@ -478,6 +485,8 @@ static void *physics_main(void *arg) {
       break;
     }
     int64_t start = now_ns();
+    // read before the drain: a slice noted as delivered has its commands drained with it
+    l->c.program_slice = atomic_load_explicit(&l->program_slice, memory_order_acquire);
     drain_commands(l);
     urt_ctrl_tick(l->m, &l->c, &l->d);
     int64_t busy = 0;

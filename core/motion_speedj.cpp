@@ -29,6 +29,19 @@
 // a goal clears it). The position lost while the program was late (about L²·a·T² per event) is
 // not made up. On time nothing changes.
 //
+// Nor does a program's speedj begin to stop when its t runs out while the program's thread is
+// behind: the next command of the stream has not come because the thread has not run, not
+// because the program ended the stream. On a controller the program runs every period and the
+// next speedj would supersede it at once. So it runs on as if its t were longer, for as long as
+// the thread is behind (urt_ctrl_t.program_slice) and at most kRunOnMax, then stops at its a.
+// Stopping there and making the speed up when the late command came moved the set-point's
+// position by what the arm lost in between; URCL's next spline point starts from that
+// position (get_joint_positions) and its quintic closes the gap within 10 ms, at up to 6·gap/T²:
+// with the runner 2–4 periods late at 5 % of the periods the shoulder's set-point swung
+// between ±50 rad/s² and the stream ended in a torque-limit protective stop
+// (tests/net/urscript/stream_late_probe.c). On time the stop begins the period after t ran
+// out, as before, with the same set-points.
+//
 // A goal faster than a joint can turn is not a protective stop: the trajectory limiter scales
 // the whole goal down (every joint by the same fraction, so the direction holds) until the
 // fastest joint, relative to its limit, runs at qd_max; RTDE's speed_scaling ("speed scaling
@@ -41,6 +54,10 @@
 namespace urt::core {
 
 namespace {
+
+// how long a program's speedj runs on past its t for a late program thread [s]: the lateness
+// a loaded host gives (up to 9 periods at 500 Hz seen in URCL's runs; 3 at 125 Hz)
+constexpr double kRunOnMax = 0.025;
 
 bool bad_argument(const urt_ctrl_cmd_t& cmd) {
   return !(cmd.a > 0.0) || !std::isfinite(cmd.a) || !std::isfinite(cmd.t);
@@ -107,6 +124,8 @@ void start(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const MotionStart& st)
   sj.late = late;
   sj.fresh = 1.0;
   sj.tau = 0.0;
+  sj.expired = 0;
+  sj.held = 0.0;
   c->motion = URT_MOTION_SPEEDJ;
 }
 
@@ -114,6 +133,17 @@ uint32_t tick(const MotionEnv& e) {
   urt_ctrl_t* c = e.c;
   urt_speedj_state_t& sj = c->motion_state.speedj;
   const double T = c->period, s = e.scale;
+  if (sj.expired != 0) {
+    // its t ran out last period and the command due at this period's start did not come: the
+    // program's thread has not yet delivered that slice (behind), or it issued no speedj
+    const bool behind = c->program_slice != 0 && c->program_slice + 1 < c->tick;
+    if (!behind || sj.held >= std::fmax(kRunOnMax, 3.0 * T) - 1e-9 * T) {
+      start_stop(c, joint_stop_time(c, c->active.a));
+      c->seg_time = T;  // (as if begun at the end of the last period, where t ran out)
+      return kStopMotion.tick(e);
+    }
+    sj.held += T;
+  }
   sj.tau += s * T;
   bool reached = true;
   for (int j = 0; j < URT_NJ; j++) {
@@ -134,9 +164,13 @@ uint32_t tick(const MotionEnv& e) {
   if (reached && c->active.t <= 0.0) {
     mark_done(c, c->motion_id);  // speedj without t returns once the speed is reached
   }
-  if (c->active.t > 0.0 && sj.tau >= c->active.t - 1e-6 * T) {  // as the VM counts it
+  if (c->active.t > 0.0 && sj.expired == 0 && sj.tau >= c->active.t - 1e-6 * T) {  // as the VM counts it
     mark_done(c, c->motion_id);
-    start_stop(c, joint_stop_time(c, c->active.a));
+    if (c->active.tick != 0 && c->program_slice != 0) {
+      sj.expired = c->tick;  // a program's: whether to stop is known next period
+    } else {
+      start_stop(c, joint_stop_time(c, c->active.a));
+    }
   }
   return 0;
 }

@@ -90,6 +90,8 @@ static int host_snapshot_at(void *ctx, uint64_t tick, urt_snapshot_t *out) {
 // (0 of 6 without the wait), so a late runner's commands still reach a later tick.
 static void host_tick_done(void *ctx, uint64_t tick, bool running) {
   urt_emulator_t *e = ctx;
+  // the controller sees whether the program's next command is still to come (motion_speedj.cpp)
+  urt_loop_note_program_slice(e->loop, running ? tick : 0);
   pthread_mutex_lock(&e->reg_lock);
   e->out_running = running;
   if (!running) {

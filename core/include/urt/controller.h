@@ -279,6 +279,13 @@ typedef struct urt_ctrl {
     double q[URT_SERVOJ_REPLAY][URT_NJ], qd[URT_SERVOJ_REPLAY][URT_NJ];
     uint64_t timeout_tick;
   } servoj_replay;
+
+  /* the newest controller tick whose slice the running program's thread has delivered (its
+   * commands are in the rings; 0: no program runs), set by the loop before each period. A
+   * program's command is due at the period after its tick: while this is behind that, the
+   * program's thread runs late (descheduled) and its next command is still to come
+   * (core/motion_speedj.cpp). */
+  uint64_t program_slice;
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or

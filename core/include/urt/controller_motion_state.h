@@ -40,6 +40,8 @@ typedef struct urt_speedj_state {
   double late;                   /* periods this speedj came late (or the one it superseded)  */
   double fresh;                  /* 1 until its first period: superseded then, it never ramped */
   double limit;                  /* the trajectory limiter's fraction of the commanded speed  */
+  uint64_t expired;              /* a program's speedj: the tick its t ran out (0: running)    */
+  double held;                   /* time it has run on past t, its program's thread late [s]  */
 } urt_speedj_state_t;
 
 typedef struct urt_speedl_state {

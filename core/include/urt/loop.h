@@ -125,6 +125,11 @@ int urt_loop_producer_count(const urt_loop_t *l);
 const char *urt_loop_producer_name(const urt_loop_t *l, int producer);
 uint64_t urt_loop_producer_dropped(const urt_loop_t *l, int producer);
 
+/* The running program's thread has delivered its slice of controller tick `tick` (its commands
+ * are submitted); 0: no program runs. Read by the physics thread before each period
+ * (urt_ctrl_t.program_slice). Any thread; one writer (the program runner). */
+void urt_loop_note_program_slice(urt_loop_t *l, uint64_t tick);
+
 /* Lockstep pacing: allow n more controller ticks. Other pacings ignore it. */
 void urt_loop_grant(urt_loop_t *l, uint64_t n);
 
