@@ -26,6 +26,7 @@
 #define HALT_DECELERATION 4.0  /* [rad/s²] joint deceleration of the stop that ends a program */
 #define SUBMIT_RETRY_TICKS 100
 #define CLOSE_WAIT_MS 250      /* [ms] at most, at a program's end, for the peers to close their ends */
+#define FIRST_TICK_TRIES 100   /* waits of wait_timeout_ms for the controller's first tick before a program starts */
 
 typedef struct unit {
   char *text;
@@ -170,6 +171,16 @@ static void run_main(urt_runner_t *r, const unit *u) {
   if (urt__us_parse(u->text, u->len, &p, &e) != 0) {
     report(r, &e, false);
     return;
+  }
+
+  // the ports open before the physics thread publishes its first tick, and a program that
+  // came in between read the snapshot of none (robot mode 0): its first move was refused as
+  // "robot is not running" (1 in 14–27 runs of a program sent as soon as 30002 accepted)
+  urt_snapshot_t s;
+  r->host.snapshot(r->host.ctx, &s);
+  for (int k = 0; s.tick == 0 && k < FIRST_TICK_TRIES && !poll_main(r); k++) {
+    r->host.wait_tick(r->host.ctx, 0, r->cfg.wait_timeout_ms);
+    r->host.snapshot(r->host.ctx, &s);
   }
 
   set_state(r, URT_PROGRAM_PLAYING);

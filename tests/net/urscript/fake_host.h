@@ -26,6 +26,7 @@ typedef struct fake_host {
   int tick_sleep_us;        /* real time per tick (0: as fast as asked)        */
   unsigned jump_seed;       /* nonzero: each wait_tick advances 1–4 ticks (a late runner) */
   uint64_t vm_tick;         /* the tick the runner asked to process: last after_tick + 1  */
+  uint64_t running_from;    /* nonzero: robot mode RUNNING from this tick on (a boot)     */
   urt_ctrl_cmd_t cmd[FAKE_MAX];
   uint64_t cmd_vm_tick[FAKE_MAX];  /* vm_tick when each command arrived                */
   int n_cmd;
@@ -88,6 +89,7 @@ static inline uint64_t fake_wait_tick(void *ctx, uint64_t after, int timeout_ms)
     f->s.tick++;
   }
   f->s.time = (double)f->s.tick * f->s.period;
+  if (f->running_from && f->s.tick >= f->running_from) f->s.robot_mode = URT_ROBOT_MODE_RUNNING;
   if (f->pending_id && f->s.tick >= f->motion_end) {
     f->s.motion_done_id = f->pending_id;
     f->pending_id = 0;

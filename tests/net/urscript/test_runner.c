@@ -71,6 +71,23 @@ static void test_runner__program_reports_started_text_stopped(void **state) {
   assert_int_equal(F.s.program_state, URT_PROGRAM_STOPPED);
 }
 
+static void test_runner__program_before_the_first_tick_waits_for_it(void **state) {
+  // urtwin's ports open before the physics publishes its first tick, whose snapshot is all
+  // zeros: a program that came then had its first move refused ("robot is not running")
+  pthread_mutex_lock(&F.mu);
+  F.s.robot_mode = URT_ROBOT_MODE_DISCONNECTED;
+  F.running_from = 1;
+  pthread_mutex_unlock(&F.mu);
+  submit("def home():\n  movej([0,0,0,0,0,0])\nend");
+  wait_idle();
+  assert_int_equal(F.n_msg, 2);
+  assert_key(0, "PROGRAM_XXX_STARTED", "home");
+  assert_key(1, "PROGRAM_XXX_STOPPED", "home");
+  int k = fake_find_cmd(&F, URT_CTRL_PROGRAM_STATE, 0);
+  assert_true(k >= 0);
+  assert_true(F.cmd_vm_tick[k] >= 1);  // PLAYING only once the controller has ticked
+}
+
 static void test_runner__unknown_function_is_reported_and_nothing_runs(void **state) {
   // URCL's test_program_execution_reports_exception
   submit("def illegal_fun():\n  movej([0,0,0,0,0,0])\n  calldoesntexist()\nend");
@@ -193,6 +210,7 @@ static void test_runner__submit_refuses_bad_units(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_runner__program_reports_started_text_stopped, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_runner__program_before_the_first_tick_waits_for_it, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__unknown_function_is_reported_and_nothing_runs, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__runtime_error_is_reported_then_stopped, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__new_program_stops_the_running_one, setup, teardown),
