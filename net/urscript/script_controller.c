@@ -13,8 +13,18 @@
 
 #define SUBMIT_RETRY_TICKS 100
 
+/* what the controller had at the end of the slice's own tick, as on a controller, where the
+ * program runs in the cycle: a thread woken late runs its missed slices back to back, and read
+ * live they saw a later tick's set-point, one that the set-point moved on to while the thread
+ * was away. URCL's spline starts each point from get_joint_positions(): read ahead by L
+ * periods, its quintic took the arm for further along than the stream's own time and slowed it
+ * down (shoulder set-point -10 rad/s² in one period, stream_late_probe). The newest snapshot
+ * when the tick has left the controller's history (or before the first tick). */
 urt_snapshot_t *urt__us_snap(vm *V) {
-  V->h->host->snapshot(V->h->host->ctx, &V->snap);
+  const urt_script_host_t *h = V->h->host;
+  if (!h->snapshot_at || V->tick == 0 || h->snapshot_at(h->ctx, V->tick, &V->snap) != 0) {
+    h->snapshot(h->ctx, &V->snap);
+  }
   return &V->snap;
 }
 
