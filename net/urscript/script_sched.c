@@ -441,7 +441,7 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
   }
   for (;;) {
     const uint64_t cpu0 = h->tick_cpu ? thread_cpu_ns() : 0;
-    if (!p->secondary && urt__us_service_tick(&S->service, h, err) != X_OK) {
+    if (!p->secondary && urt__us_service_tick(&S->service, h, S->tick, err) != X_OK) {
       break;  // the watchdog fired: the program stops with its message
     }
     run_tick(S);

@@ -13,17 +13,21 @@
 #define CONTACT_FORCE 10.0  /* [N] resisting force along the direction that is a contact */
 #define CONTACT_ONSET 2.5   /* [N] below this the contact had not started yet            */
 
-int urt__us_service_tick(us_service *sv, const us_hooks *h, us_err *err) {
+int urt__us_service_tick(us_service *sv, const us_hooks *h, uint64_t tick, us_err *err) {
   const urt_script_host_t *host = h->host;
+  // the tick's own snapshot, as the slices read (urt__us_snap): a late runner's service ticks,
+  // run back to back, recorded the newest force each, the same sample several times over
   urt_snapshot_t s;
-  host->snapshot(host->ctx, &s);
+  if (!host->snapshot_at || tick == 0 || host->snapshot_at(host->ctx, tick, &s) != 0) {
+    host->snapshot(host->ctx, &s);
+  }
   uint64_t k = sv->n++ % US_HIST;
   memcpy(sv->f[k], s.tcp_force, sizeof sv->f[k]);  // already less zero_ftsensor's offset
 
   // rtde_set_watchdog(…, "stop"): a refresh within 1 / f (one tick of slack)
   if (sv->wd_on && host->read_registers) {
     urt_rtde_registers_t r;
-    host->read_registers(host->ctx, UINT64_MAX, &r);
+    host->read_registers(host->ctx, tick, &r);
     uint32_t n = sv->wd_double ? r.in_double_writes[sv->wd_reg] : r.in_int_writes[sv->wd_reg];
     if (n != sv->wd_count || sv->wd_last < 0) {
       sv->wd_count = n;

@@ -177,7 +177,7 @@ us_service *urt__us_service(vm *V);
 
 /* Once per tick before the threads run: record, then the watchdog (X_ERR with err set when it
  * fired). Context: the runner thread. */
-int urt__us_service_tick(us_service *sv, const us_hooks *h, us_err *err);
+int urt__us_service_tick(us_service *sv, const us_hooks *h, uint64_t tick, us_err *err);
 
 /* Whether this thread is being unwound (killed, or the program stops): errors go unrecorded. */
 bool urt__us_unwinding(const vm *V);

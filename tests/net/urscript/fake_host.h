@@ -27,6 +27,7 @@ typedef struct fake_host {
   unsigned jump_seed;       /* nonzero: each wait_tick advances 1–4 ticks (a late runner) */
   uint64_t vm_tick;         /* the tick the runner asked to process: last after_tick + 1  */
   uint64_t running_from;    /* nonzero: robot mode RUNNING from this tick on (a boot)     */
+  bool ramp;                /* q_target[0] = 0.001·tick and tcp_force[2] = −tick each tick */
   urt_ctrl_cmd_t cmd[FAKE_MAX];
   uint64_t cmd_vm_tick[FAKE_MAX];  /* vm_tick when each command arrived                */
   int n_cmd;
@@ -81,21 +82,27 @@ static inline uint64_t fake_wait_tick(void *ctx, uint64_t after, int timeout_ms)
   if (f->tick_sleep_us > 0) usleep((useconds_t)f->tick_sleep_us);
   pthread_mutex_lock(&f->mu);
   f->vm_tick = after + 1;
+  uint64_t n = 1;
   if (f->jump_seed) {
     f->jump_seed = f->jump_seed * 1103515245u + 12345u;
     if (!f->jump_seed) f->jump_seed = 1;
-    if (f->s.tick <= after) f->s.tick += 1 + (uint64_t)((f->jump_seed >> 16) & 3);
-  } else {
-    f->s.tick++;
+    n = f->s.tick <= after ? 1 + (uint64_t)((f->jump_seed >> 16) & 3) : 0;
   }
-  f->s.time = (double)f->s.tick * f->s.period;
-  if (f->running_from && f->s.tick >= f->running_from) f->s.robot_mode = URT_ROBOT_MODE_RUNNING;
-  if (f->pending_id && f->s.tick >= f->motion_end) {
-    f->s.motion_done_id = f->pending_id;
-    f->pending_id = 0;
+  for (uint64_t k = 0; k < n; k++) {  // every tick passed over is kept, as the controller does
+    f->s.tick++;
+    f->s.time = (double)f->s.tick * f->s.period;
+    if (f->running_from && f->s.tick >= f->running_from) f->s.robot_mode = URT_ROBOT_MODE_RUNNING;
+    if (f->ramp) {  // readings that differ every tick
+      f->s.q_target[0] = 0.001 * (double)f->s.tick;
+      f->s.tcp_force[2] = -(double)f->s.tick;
+    }
+    if (f->pending_id && f->s.tick >= f->motion_end) {
+      f->s.motion_done_id = f->pending_id;
+      f->pending_id = 0;
+    }
+    f->history[f->s.tick % FAKE_HISTORY] = f->s;
   }
   uint64_t t = f->s.tick;
-  f->history[t % FAKE_HISTORY] = f->s;
   pthread_mutex_unlock(&f->mu);
   return t;
 }

@@ -136,6 +136,35 @@ static void test_sched__same_stream_however_late_the_runner_is(void **state) {
   assert_true(late_max >= 1 && late_max <= 3);  // a jump of 4 ticks leaves the slice 3 behind
 }
 
+static void test_sched__readings_are_their_ticks_however_late_the_runner_is(void **state) {
+  // get_joint_positions() and the force history behind tool_contact, with readings that
+  // change every tick: a late runner's slices and service ticks read their own ticks
+  static const char *kReadings = "def p():\n"
+                                 "  i = 0\n"
+                                 "  while i < 20:\n"
+                                 "    q = get_joint_positions()\n"
+                                 "    textmsg(q[0])\n"
+                                 "    sync()\n"
+                                 "    i = i + 1\n"
+                                 "  end\n"
+                                 "  textmsg(tool_contact([0, 0, 1, 0, 0, 0]))\n"
+                                 "end\n";
+  F.ramp = true;
+  must_run(kReadings);
+  static fake_host on_time;
+  on_time = F;
+  assert_int_equal(on_time.n_msg, 21);
+  setup(state);
+  F.ramp = true;
+  F.jump_seed = 777;
+  must_run(kReadings);
+  assert_true(late_slices > 0);
+  assert_int_equal(F.n_msg, on_time.n_msg);
+  for (int k = 0; k < F.n_msg; k++) {
+    assert_string_equal(F.msg[k].text, on_time.msg[k].text);
+  }
+}
+
 static void test_sched__runaway_thread_is_too_much_behind_and_stops_the_program(void **state) {
   int rc = run_text("def p():\n"
                     "  thread spin():\n"
@@ -360,6 +389,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup(test_sched__threads_interleave_one_tick_per_wait, setup),
       cmocka_unit_test_setup(test_sched__same_stream_however_late_the_runner_is, setup),
+      cmocka_unit_test_setup(test_sched__readings_are_their_ticks_however_late_the_runner_is, setup),
       cmocka_unit_test_setup(test_sched__runaway_thread_is_too_much_behind_and_stops_the_program, setup),
       cmocka_unit_test_setup(test_sched__kill_stops_a_thread_and_join_returns, setup),
       cmocka_unit_test_setup(test_sched__critical_section_holder_runs_first_after_its_wait, setup),
