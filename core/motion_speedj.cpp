@@ -39,7 +39,7 @@
 // position (get_joint_positions) and its quintic closes the gap within 10 ms, at up to 6·gap/T²:
 // with the runner 2–4 periods late at 5 % of the periods the shoulder's set-point swung
 // between ±50 rad/s² and the stream ended in a torque-limit protective stop
-// (tests/net/urscript/stream_late_probe.c). On time the stop begins the period after t ran
+// (tests/net/urscript/test_speedj_stream_late.c). On time the stop begins the period after t ran
 // out, as before, with the same set-points.
 //
 // A goal faster than a joint can turn is not a protective stop: the trajectory limiter scales
@@ -56,7 +56,8 @@ namespace urt::core {
 namespace {
 
 // how long a program's speedj runs on past its t for a late program thread [s]: the lateness
-// a loaded host gives (up to 9 periods at 500 Hz seen in URCL's runs; 3 at 125 Hz)
+// a loaded host gives (up to 9 periods at 500 Hz seen in URCL's runs); 12 periods at 500 Hz,
+// 3 at 125 Hz
 constexpr double kRunOnMax = 0.025;
 
 bool bad_argument(const urt_ctrl_cmd_t& cmd) {
@@ -137,7 +138,7 @@ uint32_t tick(const MotionEnv& e) {
     // its t ran out last period and the command due at this period's start did not come: the
     // program's thread has not yet delivered that slice (behind), or it issued no speedj
     const bool behind = c->program_slice != 0 && c->program_slice + 1 < c->tick;
-    if (!behind || sj.held >= std::fmax(kRunOnMax, 3.0 * T) - 1e-9 * T) {
+    if (!behind || sj.held + T > kRunOnMax + 1e-9 * T) {
       start_stop(c, joint_stop_time(c, c->active.a));
       c->seg_time = T;  // (as if begun at the end of the last period, where t ran out)
       return kStopMotion.tick(e);
@@ -164,7 +165,8 @@ uint32_t tick(const MotionEnv& e) {
   if (reached && c->active.t <= 0.0) {
     mark_done(c, c->motion_id);  // speedj without t returns once the speed is reached
   }
-  if (c->active.t > 0.0 && sj.expired == 0 && sj.tau >= c->active.t - 1e-6 * T) {  // as the VM counts it
+  // (t as the VM counts it)
+  if (c->active.t > 0.0 && sj.expired == 0 && sj.tau >= c->active.t - 1e-6 * T) {
     mark_done(c, c->motion_id);
     if (c->active.tick != 0 && c->program_slice != 0) {
       sj.expired = c->tick;  // a program's: whether to stop is known next period

@@ -278,6 +278,51 @@ static void test_servoj__a_late_jump_is_not_re_run(void **state) {
   rig_free(&r);
 }
 
+/* ---- a program's speedj whose t runs out while the program's thread is behind ---- */
+
+/* joint 1's set-point speed per period: a speedj(0.3 rad/s, a = 6, t = 0.1) issued by a
+ * program (stamped) or not; then no command. behind: the controller sees the program's thread
+ * stuck at the speedj's slice (urt_ctrl_t.program_slice, as the loop sets it); else it sees
+ * each slice delivered on time. */
+static void speedj_then_silence(int stamped, int behind, double *qd, int n) {
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  run_for(&r, 0.01);  // (tick 0 is no tick: a stamp of 0 means not a program's)
+  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SPEEDJ);
+  c.q[1] = 0.3;
+  c.a = 6.0;
+  c.t = 0.1;
+  c.tick = stamped ? r.c->tick : 0;
+  const uint64_t issued = r.c->tick;
+  for (int k = 0; k < n; k++) {
+    r.c->program_slice = !stamped ? 0 : behind ? issued : r.c->tick;
+    rig_period(&r, k == 0 ? &c : NULL);
+    qd[k] = r.c->qd1[1];
+  }
+  rig_free(&r);
+}
+
+static void test_speedj__runs_on_while_the_program_is_behind(void **state) {
+  (void)state;
+  enum { N = 120, RUN_ON = 12 };  // 25 ms at 2 ms: 12 periods
+  double plain[N], on_time[N], behind[N];
+  speedj_then_silence(0, 0, plain, N);
+  speedj_then_silence(1, 0, on_time, N);
+  speedj_then_silence(1, 1, behind, N);
+  // t runs out after 50 periods: then the stop at a (0.3 / 6 = 50 ms) begins
+  assert_near(plain[49], 0.3, 1e-12);
+  assert_near(plain[50], 0.3 - 6.0 * 0.002, 1e-12);
+  assert_true(plain[N - 1] == 0.0);
+  // a program on time: the same set-points, period by period
+  for (int k = 0; k < N; k++) {
+    if (on_time[k] != plain[k]) fail_msg("period %d: on time %.17g, plain %.17g", k, on_time[k], plain[k]);
+  }
+  // a program behind: its speed held for 25 ms more, then the same stop
+  for (int k = 0; k < N; k++) {
+    const double want = k < 50 ? plain[k] : k < 50 + RUN_ON ? 0.3 : plain[k - RUN_ON];
+    if (behind[k] != want) fail_msg("period %d: behind %.17g, want %.17g", k, behind[k], want);
+  }
+}
+
 /* ---- speedj's trajectory limiter ---- */
 
 /* a goal beyond the joints' speed limits runs at the limit, in the commanded direction, with
@@ -411,6 +456,7 @@ int main(void) {
       cmocka_unit_test(test_optimovej__fractions_of_the_joint_limits_set_the_time),
       cmocka_unit_test(test_optimovej__fractions_outside_0_1_are_refused),
       cmocka_unit_test(test_speedj__a_late_program_stream_ends_where_the_on_time_one_does),
+      cmocka_unit_test(test_speedj__runs_on_while_the_program_is_behind),
       cmocka_unit_test(test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them),
       cmocka_unit_test(test_servoj__a_late_program_stream_is_re_run_from_its_ticks),
       cmocka_unit_test(test_servoj__a_late_jump_is_not_re_run),
