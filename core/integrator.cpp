@@ -18,6 +18,25 @@ namespace {
 // Below this joint speed [rad/s] the friction Jacobian in W is the mean of its two sides.
 constexpr double kStickSpeed = 1e-3;
 
+// A sub-stepped joint that its bristles hold (stick) is left in the macro step: below
+// kStickSpeed, with the bristle torque σ0 |z|, plus what this speed adds to it over two
+// steps, within this fraction of the lowest level g can take (f_c on the weaker side; g ≥ f_c,±
+// at every speed). There T_f = σ0 z + σ1 ż with ∂ż/∂q̇ = 1 − σ0 z sgn(q̇) (1/g − |q̇| g'/g²)
+// about in (0.5, 1.5) (|q̇| g'/g is below 0.01 there and → 0 at rest): a damping of at least
+// σ1/2 = 50 N m s/rad, far above the Stribeck slope the sub-steps exist for (−0.16 on the
+// wrists, which acts only in sliding, z near g/σ0); and ∂ż/∂z = −σ0 |q̇|/g ≤ 0. A stiff, stable
+// spring-damper that the L-stable W carries like the gear's springs, coupled to the arm
+// instead of frozen. Nearer breakaway, or faster, the joint is sub-stepped as before.
+constexpr double kStuckMargin = 0.5;
+
+bool joint_stuck(const urt_model_t* m, const urt_data_t* d, int j, double h) noexcept {
+  const urt_friction_params_t& fp =
+      ((d->faults.joint_mask >> j) & 1u) ? d->faults.joint[j].friction : m->friction[j];
+  const double qd = std::fabs(d->x[j][URT_X_QD]);
+  const double t_bristle = fp.sigma0 * (std::fabs(d->x[j][URT_X_Z]) + 2.0 * h * qd);
+  return qd < kStickSpeed && t_bristle < kStuckMargin * fp.f_c * (1.0 - std::fabs(fp.asym));
+}
+
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using VecD = Eigen::Matrix<double, URT_NXD, 1>;
@@ -392,10 +411,11 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
   // stiff-friction joint is split off only while it is in or near its Stribeck dip (|q̇| below
   // v_sub, twice the dip's end): the negative slope the sub-steps exist for lies there, and so
   // do the stick-to-slip reversals. Faster, its slope is a positive damping that the macro
-  // step's W carries like any other joint's
+  // step's W carries like any other joint's; stuck (joint_stuck), so is its bristles' spring
   int sub[URT_NJ];
   for (int j = 0; j < URT_NJ; j++) {
-    sub[j] = kind == kMacro && tab->substepped[j] && !(std::fabs(x[j][URT_X_QD]) >= tab->v_sub[j]);
+    sub[j] = kind == kMacro && tab->substepped[j] &&
+             !(std::fabs(x[j][URT_X_QD]) >= tab->v_sub[j]) && !joint_stuck(m, d, j, h);
   }
 
   Vec6 tau_ext, q_n;

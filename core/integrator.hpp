@@ -13,8 +13,9 @@
 // SPD system (M(q_n) − γ h diag(c1)) k_q̇ = M r_q̇ + γ h c0, solved by Cholesky.
 //
 // Joints whose output inertia is too small for the Stribeck slope at h (wrist 3: model.md
-// §5.3e) are sub-stepped, while they are slower than twice the speed where the dip ends, as
-// 1-DoF systems with their arm coupling frozen over the macro step
+// §5.3e) are sub-stepped, while they are slower than twice the speed where the dip ends and
+// not stuck (bristles within half the Coulomb level at |q̇| < 1e-3 rad/s: then the macro step
+// carries them), as 1-DoF systems with their arm coupling frozen over the macro step
 // (inertia M_jj and bias from the macro step's start and the other joints' accelerations
 // from the previous step); the macro step then sees their mean acceleration as prescribed.
 #ifndef URT_CORE_INTEGRATOR_HPP

@@ -302,6 +302,60 @@ static void test_step__refine_every_forces_the_fine_path_on_every_nth_step(void 
   urt_model_free(m);
 }
 
+// A standing arm (set-point q0 at rest) with sensor noise: wrist 3's bristles hold it, so the
+// integrator takes it in the macro step instead of sub-stepping it (integrator.cpp,
+// joint_stuck). Against the fine path of the whole model (refine_every = 1: every step as
+// n_sub coupled steps of 5 µs, nothing split off), wrist 3 must stay where the fine path has
+// it, and its current, which follows the held noise, no further from it than wrist 2's (the
+// same drive size, always in the macro step). Quantisation off, so that both runs draw and
+// hold the same noise whatever their states' last bits.
+static void run_standing(const char *rate) {
+  const char *const ov[] = {rate, "sensors.quantise=false", NULL};
+  const char *const ovf[] = {rate, "sensors.quantise=false", "simulation.refine_every=1", NULL};
+  urt_model_t *m = urt_test_model(ov), *mf = urt_test_model(ovf);
+  urt_data_t *d = new_data(m), *df = new_data(mf);
+  urt_command_t c;
+  memset(&c, 0, sizeof c);
+  memcpy(c.q, m->q0, sizeof c.q);
+  double dq[URT_NJ] = {0}, di2[URT_NJ] = {0}, qd6 = 0.0;
+  int n = (int)lround(0.5 / m->dt);
+  for (int k = 0; k < n; k++) {
+    assert_int_equal(urt_command_set(m, d, &c), 0);
+    assert_int_equal(urt_command_set(mf, df, &c), 0);
+    assert_int_equal(urt_step(m, d), URT_OK);
+    assert_int_equal(urt_step(mf, df), URT_OK);
+    for (int j = 0; j < URT_NJ; j++) {
+      dq[j] = fmax(dq[j], fabs(d->x[j][URT_X_Q] - df->x[j][URT_X_Q]));
+      double e = d->x[j][URT_X_I] - df->x[j][URT_X_I];
+      di2[j] += e * e;
+    }
+    qd6 = fmax(qd6, fabs(d->x[5][URT_X_QD]));
+  }
+  double di5 = sqrt(di2[4] / n), di6 = sqrt(di2[5] / n);
+  print_message("%s: max |q - q_fine| wrist 3 %.3g rad (others up to %.3g), RMS |i - i_fine| "
+                "wrist 3 %.3g A, wrist 2 %.3g A; max |qd| wrist 3 %.3g rad/s; %u steps refined\n",
+                rate, dq[5], fmax(fmax(dq[0], dq[1]), fmax(fmax(dq[2], dq[3]), dq[4])), di6, di5,
+                qd6, d->refined_count);
+  assert_int_equal(d->refined_count, 0);
+  assert_int_equal(d->pstop, 0);
+  assert_true(qd6 < 1e-4);
+  assert_true(dq[5] < 1e-8);
+  for (int j = 0; j < URT_NJ; j++) {
+    assert_true(dq[j] < 1e-7);
+  }
+  assert_true(di6 < 1.25 * di5);
+  free(df);
+  free(d);
+  urt_model_free(mf);
+  urt_model_free(m);
+}
+
+static void test_step__standing_wrist_3_in_the_macro_step_follows_the_fine_path(void **state) {
+  (void)state;
+  run_standing("simulation.dt=5e-5");
+  run_standing("simulation.dt=1e-4");
+}
+
 // With sub-stepping switched off and model.md's steeper wrist Stribeck dip (k_q = 10), wrist 3
 // is unstable at 50 µs: urt_step must first redo implausible steps as fine steps, and when that
 // cannot save the state, stop with a finite state instead of diverging.
@@ -343,6 +397,7 @@ int main(void) {
       cmocka_unit_test(test_step__released_arm_conserves_energy_for_10_s),
       cmocka_unit_test(test_step__noisy_excitations_at_10_and_20_khz_never_stop),
       cmocka_unit_test(test_step__refine_every_forces_the_fine_path_on_every_nth_step),
+      cmocka_unit_test(test_step__standing_wrist_3_in_the_macro_step_follows_the_fine_path),
       cmocka_unit_test(test_step__unstable_settings_end_in_a_protective_stop_not_in_nan),
   };
   return cmocka_run_group_tests_name("core/step", tests, NULL, NULL);
