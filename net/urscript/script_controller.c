@@ -20,11 +20,14 @@
  * periods, its quintic took the arm for further along than the stream's own time and slowed it
  * down (shoulder set-point -10 rad/s² in one period, stream_late_probe). The newest snapshot
  * when the tick has left the controller's history (or before the first tick). */
-urt_snapshot_t *urt__us_snap(vm *V) {
-  const urt_script_host_t *h = V->h->host;
-  if (!h->snapshot_at || V->tick == 0 || h->snapshot_at(h->ctx, V->tick, &V->snap) != 0) {
-    h->snapshot(h->ctx, &V->snap);
+void urt__us_snap_at(const urt_script_host_t *h, uint64_t tick, urt_snapshot_t *out) {
+  if (!h->snapshot_at || tick == 0 || h->snapshot_at(h->ctx, tick, out) != 0) {
+    h->snapshot(h->ctx, out);
   }
+}
+
+urt_snapshot_t *urt__us_snap(vm *V) {
+  urt__us_snap_at(V->h->host, V->tick, &V->snap);
   return &V->snap;
 }
 
@@ -149,7 +152,6 @@ int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, cons
  * URCL's 3 s spline to a pose ended 0.50 rad beyond it. The next command supersedes the
  * controller's speedj while that still runs (core/motion_speedj.cpp ends it by its own t). */
 int urt__us_wait_scaled(vm *V, const us_node *at, double t, const char *what) {
-  const urt_script_host_t *h = V->h->host;
   double period = urt__us_snap(V)->period > 0 ? V->snap.period : 0.002;
   double tau = V->motion_carry_tick == V->tick ? V->motion_carry : 0.0;
   V->motion_carry = 0.0;
@@ -163,13 +165,9 @@ int urt__us_wait_scaled(vm *V, const us_node *at, double t, const char *what) {
     if (motion_check(V, at, what) != X_OK) {
       return X_ERR;
     }
-    urt_snapshot_t s;
-    // motion time, not the reported speed_scaling: speedj's limiter slows the arm, not its t
-    double scale = V->snap.motion_rate;
-    if (h->snapshot_at && h->snapshot_at(h->ctx, V->tick, &s) == 0) {
-      scale = s.motion_rate;
-    }
-    tau += scale * period;
+    // the tick's own motion time (urt__us_snap), not the reported speed_scaling: speedj's
+    // limiter slows the arm, not its t
+    tau += V->snap.motion_rate * period;
   }
   V->motion_carry = tau > t ? tau - t : 0.0;
   V->motion_carry_tick = V->tick;

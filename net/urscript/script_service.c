@@ -18,9 +18,7 @@ int urt__us_service_tick(us_service *sv, const us_hooks *h, uint64_t tick, us_er
   // the tick's own snapshot, as the slices read (urt__us_snap): a late runner's service ticks,
   // run back to back, recorded the newest force each, the same sample several times over
   urt_snapshot_t s;
-  if (!host->snapshot_at || tick == 0 || host->snapshot_at(host->ctx, tick, &s) != 0) {
-    host->snapshot(host->ctx, &s);
-  }
+  urt__us_snap_at(host, tick, &s);
   uint64_t k = sv->n++ % US_HIST;
   memcpy(sv->f[k], s.tcp_force, sizeof sv->f[k]);  // already less zero_ftsensor's offset
 

@@ -186,6 +186,9 @@ bool urt__us_unwinding(const vm *V);
 
 /* Read the host's snapshot into V->snap and return it. */
 urt_snapshot_t *urt__us_snap(vm *V);
+/* the snapshot of controller tick `tick`, the newest when the host no longer keeps it (or for
+ * tick 0); what urt__us_snap and the per-tick service read */
+void urt__us_snap_at(const urt_script_host_t *h, uint64_t tick, urt_snapshot_t *out);
 
 /* One wait for a newer tick; cancellation and secondary programs are checked here. */
 int urt__us_wait_tick(vm *V, const us_node *at);
