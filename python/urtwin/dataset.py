@@ -493,7 +493,10 @@ def run_one(s, rid, t, p, seed, case, out_dir):
                    faults=faults)
     table = table_of(r)
     tmp = runs / f".{rid}.parquet.tmp{os.getpid()}"
-    pq.write_table(table, tmp, compression="zstd")
+    # no dictionary pages: a run's columns are floats that seldom repeat (and constant labels,
+    # which zstd takes as well); with them the write cost 2.2x as long and 20 % more bytes
+    # (43 against 19 ms and 4.9 against 4.1 MiB for a 10 s run at 500 Hz)
+    pq.write_table(table, tmp, compression="zstd", use_dictionary=False)
     os.replace(tmp, runs / f"{rid}.parquet")
     side = {
         "run_id": rid,

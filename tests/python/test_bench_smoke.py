@@ -162,9 +162,10 @@ def test_bench_physics_worst__reports_ordered_figures_and_the_motion_ran(tmp_pat
 
 
 def test_bench_dataset__reports_both_worker_counts_and_the_bare_rate(tmp_path):
-    """tools/bench_dataset.py --quick: a sweep on 1 and on 2 Ray workers (in a loopback-only
-    network namespace) and urt_step's bare rate, each positive, Ray's start-up and shutdown
-    timed apart; the ratios are derived from them."""
+    """tools/bench_dataset.py --quick: one round, a sweep on 1 and on 2 Ray workers (in a
+    loopback-only network namespace) each between two bare rates of the same runs (urt_sim),
+    every figure positive, Ray's start-up and shutdown timed apart; the ratios are derived from them (each
+    sweep against the mean of the bare rates around it)."""
     out = tmp_path / "dataset.json"
     proc = subprocess.run(
         [sys.executable, str(ROOT / "tools" / "bench_dataset.py"), "--quick", "--out", str(out)],
@@ -172,14 +173,23 @@ def test_bench_dataset__reports_both_worker_counts_and_the_bare_rate(tmp_path):
         env={**os.environ, "URT_BUILD": str(BUILD)})
     assert proc.returncode == 0, proc.stderr + proc.stdout
     res = json.loads(out.read_text())
-    assert res["bare_urt_step_rtf"] > 0
+    assert res["bare_urt_step_rtf"] > 0 and len(res["bare_sweep_rate_all"]) == 3
+    assert all(b > 0 for b in res["bare_sweep_rate_all"])
+    assert len(res["rounds"]) == 1
+    rnd = res["rounds"][0]
     for w in (1, 2):
-        t = res[f"workers_{w}"]
+        t = rnd[f"workers_{w}"]
         assert t["workers"] == w and t["ray"] and t["runs"] == 4
         assert t["simulated_s"] == pytest.approx(4.0)
         assert t["wall_s"] > 0 and t["ray_start_s"] > 0 and t["ray_stop_s"] > 0
+        before, after = rnd[f"bare_rate_adjacent_{w}"]
+        assert rnd[f"per_worker_over_bare_{w}"] == pytest.approx(
+            t["sim_per_wall"] / w / (0.5 * (before + after)))
+    assert res["bare_sweep_rate_all"][1] == rnd["bare_rate_adjacent_1"][1] == \
+        rnd["bare_rate_adjacent_2"][0]
+    assert res["per_worker_over_bare"] == pytest.approx(rnd["per_worker_over_bare_1"])
     assert res["per_worker_over_loops"] == pytest.approx(
-        res["workers_1"]["sim_per_wall"] / res["workers_1"]["sim_per_loop_cpu"])
+        rnd["workers_1"]["sim_per_wall"] / rnd["workers_1"]["sim_per_loop_cpu"])
     assert res["scaling_2_over_1"] == pytest.approx(
-        res["workers_2"]["sim_per_wall"] / res["workers_1"]["sim_per_wall"])
+        rnd["workers_2"]["sim_per_wall"] / rnd["workers_1"]["sim_per_wall"])
     assert "2 workers / 1 worker" in proc.stdout
