@@ -507,6 +507,31 @@ def run_version(args, name):
         if args.verbose:
             print(f"  {name}/{test_id}: {rec['status']} ({rec['seconds']:.1f} s)", flush=True)
 
+    def retry(test_id, rerun):
+        """A gated test that failed runs once more, alone, on a fresh urtwin (as after a
+        crash), and that run's result counts; the first attempt stays in the record and the
+        report names the test. Why: on this shared 2-core VM a host stall (a physics period of
+        27 ms wall, no RTDE package for 100 ms) fails a timing-bound URCL test now and then
+        (the spline suites alone failed 1 of 6 version-runs in session 18 on a gated test);
+        a test that fails for a cause of urtwin's fails twice."""
+        first = results[test_id]
+        robot.stop()
+        robot.restarts += 1
+        robot.start()
+        rerun()
+        rec = results[test_id]
+        rec["first_attempt"] = {k: first[k] for k in ("status", "seconds", "message", "note")
+                                if k in first}
+        if args.verbose:
+            print(f"  {name}/{test_id}: retried, {rec['status']}", flush=True)
+
+    def may_retry(test_id):
+        rec = results.get(test_id)
+        return (args.retries > 0 and rec is not None
+                and rec["status"] not in ("passed", "skipped", "excluded")
+                and only is not None and test_id in only
+                and not match(patterns, f"{name}/{test_id}", "watch"))
+
     def run_batch(binary, extra, timeout, tests):
         """All of tests in one process, as `./binary` would (a suite's SetUpTestSuite, e.g. the
         robot connection, runs once), watched through gtest's progress lines: a test that
@@ -583,6 +608,10 @@ def run_version(args, name):
             for test in alone:
                 run_batch(binary, extra, timeout, [test])
                 results[f"{binary}/{test}"]["note"] = "run in a process of its own"
+            for test in now + alone:
+                test_id = f"{binary}/{test}"
+                if may_retry(test_id):
+                    retry(test_id, lambda: run_batch(binary, extra, timeout, [test]))
             alone = []
         if later:
             # URCL's fake-server tests serve the robot's ports themselves: urtwin stopped
@@ -602,12 +631,18 @@ def run_version(args, name):
                 if reason:
                     results[test_id] = {"status": "excluded", "seconds": 0.0, "note": reason}
                     continue
-                rec = run_program([os.path.join(exdir, example), ROBOT_IP, *EXAMPLE_ARGS], work,
-                                  timeout, os.path.join(logs, f"example_{example}.log"))
-                known = match(patterns, test_id, "known")
-                if known and rec["status"] != "passed":
-                    rec["known"] = known
-                after(test_id, rec)
+                def run_example():
+                    rec = run_program([os.path.join(exdir, example), ROBOT_IP, *EXAMPLE_ARGS],
+                                      work, timeout,
+                                      os.path.join(logs, f"example_{example}.log"))
+                    known = match(patterns, test_id, "known")
+                    if known and rec["status"] != "passed":
+                        rec["known"] = known
+                    after(test_id, rec)
+
+                run_example()
+                if may_retry(test_id):
+                    retry(test_id, run_example)
             ours = os.path.join(os.path.dirname(os.path.abspath(args.build)), "ours")
             rt = ["chrt", "-f", "50"] if realtime_permitted() else []
             ours_run = [(prog, extra, timeout) for prog, extra, timeout, versions in OURS
@@ -694,11 +729,16 @@ def main():
                     help="run only the tests expected_pass.txt lists (make test: bounded time)")
     ap.add_argument("--write-expected", action="store_true",
                     help="rewrite --expected with the tests that passed in this run")
+    ap.add_argument("--retries", type=int, default=None,
+                    help="a listed test that fails runs once more, alone on a fresh urtwin, "
+                    "and that result counts (default: 1 with --only-expected, else 0)")
     ap.add_argument("--jobs", type=int, default=2, help="versions run side by side (netns only)")
     ap.add_argument("--verbose", "-v", action="store_true")
     ap.add_argument("--one", help=argparse.SUPPRESS)       # child: run this version only
     ap.add_argument("--netns", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.retries is None:
+        args.retries = 1 if args.only_expected else 0
 
     if args.one:
         part = run_version(args, args.one)
@@ -742,6 +782,7 @@ def main():
                     cmd += ["--no-examples"]
                 if args.only_expected:
                     cmd += ["--only-expected", "--expected", args.expected]
+                cmd += ["--retries", str(args.retries)]
                 if args.verbose:
                     cmd += ["--verbose"]
                 if netns:
@@ -780,6 +821,13 @@ def main():
                 print(f"  {rec['status']:8s} {test_id}{cause}: {shown}")
                 for line in rec.get("controller_log", []):
                     print(f"           controller log: {line[:150]}")
+        for test_id, rec in part["results"].items():
+            first = rec.get("first_attempt")
+            if first:
+                msg = first.get("message", "")
+                shown = msg if len(msg) <= 200 else msg[:50] + " ... " + msg[-150:]
+                print(f"  retried  {test_id}: {first['status']} at first ({shown}); "
+                      f"{rec['status']} alone on a fresh urtwin")
     print(f"\nwall time of the URCL run: {wall:.0f} s")
 
     passed = {f"{n}/{t}" for n, part in parts.items() for t, rec in part["results"].items()
