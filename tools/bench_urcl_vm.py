@@ -29,7 +29,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests" / "urcl"))
-from run_urcl import realtime_permitted, wait_port  # noqa: E402  (the URCL runner's, the same start)
+from urcl_urtwin import realtime_permitted, wait_port  # noqa: E402  (the URCL runner's, the same start)
 HOST = "127.0.0.2"
 URCL_DIR = Path("shared") / "clients" / "Universal_Robots_Client_Library-2.14.0"
 
