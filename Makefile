@@ -101,16 +101,11 @@ test-asan: build-asan
 	  ctest --test-dir build-asan --output-on-failure -j $(JOBS) -E '^reference/' \
 	    --output-junit $(abspath build-asan)/ctest-junit.xml
 
-# every libFuzzer target for FUZZ_SECONDS under ASan/UBSan; corpora persist in build-asan/fuzz-corpus
+# every libFuzzer target for FUZZ_SECONDS under ASan/UBSan, two at a time (tools/run_fuzzers.sh);
+# corpora persist in build-asan/fuzz-corpus
 FUZZ_SECONDS ?= 30
 test-fuzz: build-asan
-	@set -e; for f in build-asan/tests/fuzz/fuzz_*; do \
-	  [ -x "$$f" ] || continue; n=$$(basename $$f); mkdir -p build-asan/fuzz-corpus/$$n; \
-	  echo "fuzz: $$n for $(FUZZ_SECONDS) s"; \
-	  $$f -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
-	    build-asan/fuzz-corpus/$$n 2>build-asan/$$n.log || { tail -40 build-asan/$$n.log; exit 1; }; \
-	  grep -E '^(Done|stat::number_of_executed_units)' build-asan/$$n.log | tail -1; \
-	done
+	sh tools/run_fuzzers.sh $(FUZZ_SECONDS) 2
 
 fuzz:
 	$(MAKE) test-fuzz FUZZ_SECONDS=600
