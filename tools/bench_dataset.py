@@ -31,6 +31,7 @@ import re
 import subprocess
 import sys
 import tempfile
+from statistics import median
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -46,9 +47,12 @@ splits: {{train: 0.5, test: 0.5}}
 faults:
   - healthy
   - name: gear_stiffness
-    faults: [{{class: gear_stiffness, joint: 1, severity: 0.5, unit: "1",
-              profile: {{kind: step, onset: 1.0}}}}]
+    faults: [{fault}]
 """
+
+# the sweep's fault (shoulder mesh -50 %), also urt_sim's scenario for the bare runs
+FAULT = ('{class: gear_stiffness, joint: 1, severity: 0.5, unit: "1", '
+         'profile: {kind: step, onset: 1.0}}')
 
 
 def bare_rate(build):
@@ -63,17 +67,12 @@ def bare_rate(build):
     return run["rtf"], run["median_us"]
 
 
-FAULT = """faults:
-  - {class: gear_stiffness, joint: 1, severity: 0.5, unit: "1", profile: {kind: step, onset: 1.0}}
-"""
-
-
 def bare_sweep_rate(build, tmp, duration, seeds):
     """The sweep's own runs (the excitation of each seed, healthy and with the sweep's fault)
     stepped by urt_sim with nothing recorded: urt_step and the set-point alone, on the same
     physics. Simulated seconds over the wall time urt_sim reports for its loops."""
     faults = Path(tmp) / "fault.yaml"
-    faults.write_text(FAULT)
+    faults.write_text(f"faults:\n  - {FAULT}\n")
     sim, wall = 0.0, 0.0
     for seed in range(1, seeds + 1):
         for extra in ([], ["--faults", str(faults)]):
@@ -100,12 +99,6 @@ def sweep(sweep_file, out, workers):
     return json.loads((out / "last_sweep_timing.json").read_text())
 
 
-def median(xs):
-    xs = sorted(xs)
-    n = len(xs)
-    return xs[n // 2] if n % 2 else 0.5 * (xs[n // 2 - 1] + xs[n // 2])
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", help="write the results as JSON")
@@ -125,7 +118,7 @@ def main(argv=None):
         bares = [bare_sweep_rate(build, tmp, duration, seeds)]
         f = Path(tmp) / "sweep.yaml"
         f.write_text(SWEEP.format(config=ROOT / "config" / "ur5.yaml", duration=duration,
-                                  seeds=seeds))
+                                  seeds=seeds, fault=FAULT))
         for k in range(rounds):
             rnd = {}
             for w in (1, 2):
