@@ -27,6 +27,9 @@
 
 enum { kRefTicks = 8192 };  // ticks of the on-time reference (the stream takes about 1100)
 static uint64_t g_ref_n;     // the last tick the on-time run recorded
+// the on-time stream's target q and qd per tick (recorded by the on-time run, compared by the
+// late ones): how far the late set-point strays from where the program put it on time
+static double g_ref_q[kRefTicks][URT_NJ], g_ref_qd[kRefTicks][URT_NJ];
 
 typedef struct probe {
   urt_loop_t *l;
@@ -37,10 +40,7 @@ typedef struct probe {
   uint64_t seen;  // newest tick summarised
   double qdd_max[URT_NJ], moment_max[URT_NJ];
   int pstop;
-  // the on-time stream's target q per tick (recorded by the on-time run, compared by the late
-  // ones): how far the late set-point strays from where the program put it on time
-  double (*ref)[URT_NJ], (*ref_qd)[URT_NJ];
-  int record_ref;
+  int ref;  // 0 none, 1 record the on-time reference (g_ref_q), 2 compare with it
   double dq_max[URT_NJ], dqd_max[URT_NJ];
   int note_slices;  // the host tells the loop each delivered slice (as urtwin)
 } probe;
@@ -59,15 +59,15 @@ static void summarise(probe *pr) {
       pr->qdd_max[j] = fmax(pr->qdd_max[j], fabs(s.qdd_target[j]));
       pr->moment_max[j] = fmax(pr->moment_max[j], fabs(s.m_target[j]));
     }
-    if (pr->ref && t < kRefTicks && (pr->record_ref || t <= g_ref_n)) {
-      if (pr->record_ref) g_ref_n = t;
+    if (pr->ref && t < kRefTicks && (pr->ref == 1 || t <= g_ref_n)) {
+      if (pr->ref == 1) g_ref_n = t;
       for (int j = 0; j < URT_NJ; j++) {
-        if (pr->record_ref) {
-          pr->ref[t][j] = s.q_target[j];
-          pr->ref_qd[t][j] = s.qd_target[j];
+        if (pr->ref == 1) {
+          g_ref_q[t][j] = s.q_target[j];
+          g_ref_qd[t][j] = s.qd_target[j];
         } else {
-          pr->dq_max[j] = fmax(pr->dq_max[j], fabs(s.q_target[j] - pr->ref[t][j]));
-          pr->dqd_max[j] = fmax(pr->dqd_max[j], fabs(s.qd_target[j] - pr->ref_qd[t][j]));
+          pr->dq_max[j] = fmax(pr->dq_max[j], fabs(s.q_target[j] - g_ref_q[t][j]));
+          pr->dqd_max[j] = fmax(pr->dqd_max[j], fabs(s.qd_target[j] - g_ref_qd[t][j]));
         }
       }
     }
@@ -174,17 +174,13 @@ typedef struct outcome {
   double dq, dqd;            // the largest |target q|, |target qd| off the on-time stream
 } outcome;
 
-static double g_ref_q[kRefTicks][URT_NJ], g_ref_qd[kRefTicks][URT_NJ];
-
 // ref: 0 none, 1 record the on-time reference, 2 compare with it
 static outcome run_stream(double period, double slider, unsigned seed, double p_late,
                           int note_slices, int ref) {
   const char *quiet[] = {"sensors.noise=false", NULL};
   urt_model_t *m = urt_test_model(quiet);
   assert_non_null(m);
-  probe pr = {.seed = seed, .p_late = p_late, .note_slices = note_slices,
-              .ref = ref ? g_ref_q : NULL, .ref_qd = ref ? g_ref_qd : NULL,
-              .record_ref = ref == 1};
+  probe pr = {.seed = seed, .p_late = p_late, .note_slices = note_slices, .ref = ref};
   urt_loop_config_t cfg = {.period = period, .pacing = URT_PACING_LOCKSTEP, .powered = 1};
   const double qa[URT_NJ] = {-1.57, -1.57, 0.0, -1.57, 0.0, 0.0};
   char err[512];
