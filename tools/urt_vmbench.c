@@ -133,7 +133,7 @@ int main(int argc, char **argv) {
   snprintf(sync_only, sizeof sync_only,
            "def idle():\n  i = 0\n  while i < %d:\n    sync()\n    i = i + 1\n  end\nend\n", ticks);
   // a thread that computes 5000 loop iterations (~15000 steps) in each of its ticks: what one
-  // legal slice can cost (the budget before "Runtime is too much behind" is 200000 steps)
+  // legal slice can cost (a thread is preempted after 200000 steps in one tick)
   snprintf(burst, sizeof burst,
            "def burst():\n  k = 0\n  while k < %d:\n    i = 0\n    while i < 5000:\n"
            "      i = i + 1\n    end\n    sync()\n    k = k + 1\n  end\nend\n",

@@ -241,8 +241,18 @@ static void frame_clear(vm *V, frame *f) {
 //---- evaluation ----
 
 static int step(vm *V, const us_node *at) {
-  if (++V->steps > V->h->step_budget) {
+  V->slice++;
+  if (++V->steps > V->h->step_budget * TOO_MUCH_BEHIND_SLICES) {
     return urt__us_fail(V, at, "Runtime is too much behind");
+  }
+  return X_OK;
+}
+
+/* A statement's start or a loop's next turn: where a thread that has used up its slice
+ * (step_budget steps since it was resumed) gives the frame to the others (script_sched.c). */
+static int turn(vm *V, const us_node *at) {
+  if (V->slice >= V->h->step_budget) {
+    return urt__us_preempt(V, at);
   }
   return X_OK;
 }
@@ -703,7 +713,7 @@ static int exec_assign(vm *V, const us_node *n) {
 }
 
 static int exec_stmt(vm *V, const us_node *n) {
-  if (step(V, n) != X_OK) return X_ERR;
+  if (turn(V, n) != X_OK || step(V, n) != X_OK) return X_ERR;
   size_t mark = V->used;
   int rc = X_OK;
   switch (n->kind) {
@@ -757,9 +767,10 @@ static int exec_stmt(vm *V, const us_node *n) {
       break;
     }
     case N_WHILE:
-      for (;;) {
+      for (bool again = false;; again = true) {
         sv c;
         V->used = mark;
+        if (again && (rc = turn(V, n)) != X_OK) break;
         rc = eval(V, n->a, &c);
         if (rc != X_OK || !truthy(&c)) break;
         V->used = mark;

@@ -7,8 +7,13 @@
  * UR's rule (script manual, "Thread scheduling"): each 2 ms frame, every runnable thread runs
  * until it executes something that consumes time (a motion, sync, sleep, a blocking read, join)
  * or ends. Here every such wait goes through urt__us_wait_tick → urt__us_yield, which parks the
- * thread until the next tick. A thread that runs more than the step budget without yielding is
- * "Runtime is too much behind" (script_interp.c) and stops the program.
+ * thread until the next tick. "If a thread uses up its entire time slice … by computational
+ * heavy instructions (such as an infinite loop that do not control the robot) it is placed in a
+ * non-runnable state, and is not allowed to run until the next frame starts": a thread that ran
+ * the step budget since it was resumed is preempted (urt__us_preempt) at its next statement or
+ * loop turn, and the others run in this frame. One that goes on computing without ever waiting,
+ * TOO_MUCH_BEHIND_SLICES slices in a row, is "Runtime is too much behind" (script_interp.c) and
+ * stops the program.
  *
  * Time is counted, not measured: the scheduler processes ticks one after the other (tick+1
  * after tick, never skipping when the host is ahead because the runner woke late), so the same
@@ -183,6 +188,19 @@ int urt__us_yield(vm *V) {
   }
   V->tick = S->tick;
   V->steps = 0;
+  V->slice = 0;
+  return X_OK;
+}
+
+int urt__us_preempt(vm *V, const us_node *at) {
+  if (V->prog->secondary) {
+    return urt__us_fail(V, at, "Runtime is too much behind");
+  }
+  int64_t steps = V->steps;
+  if (urt__us_yield(V) != X_OK) {
+    return X_ERR;
+  }
+  V->steps = steps;
   return X_OK;
 }
 

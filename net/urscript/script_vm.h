@@ -16,6 +16,9 @@
 
 #define MAX_CALL_DEPTH URT_SCRIPT_MAX_DEPTH
 #define MAX_ARGS 8
+/* slices in a row that a thread may spend computing without waiting before the program stops
+ * with "Runtime is too much behind" (each slice is step_budget steps; script_sched.c) */
+#define TOO_MUCH_BEHIND_SLICES 10
 
 //---- values ----
 
@@ -116,7 +119,8 @@ typedef struct vm {
    * starts in that same tick continues the stream (urt__us_wait_scaled) */
   double motion_carry;
   uint64_t motion_carry_tick;
-  int64_t steps;    /* steps since this thread last yielded */
+  int64_t steps;    /* steps since this thread last waited (consumed controller time) */
+  int64_t slice;    /* steps since this thread was last resumed (its share of this frame) */
   urt_snapshot_t snap;
 } vm;
 
@@ -146,6 +150,12 @@ int urt__us_vm_body(vm *V, const us_node *def, bool is_main);
  * through). X_ERR when the thread was killed or the program stopped meanwhile (nothing
  * recorded: the unwinding is silent). */
 int urt__us_yield(vm *V);
+
+/* The running thread used up its slice computing (step_budget steps since it was resumed): it
+ * is not run again before the next frame, but it did not wait, so its steps since its last wait
+ * keep counting. X_ERR when killed or stopped meanwhile, or in a secondary program (which must
+ * finish in one frame: "Runtime is too much behind"). */
+int urt__us_preempt(vm *V, const us_node *at);
 
 /* run name() → *handle; join h; kill h; enter_critical / exit_critical */
 int urt__us_thread_run(vm *V, const us_node *at, const us_node *def, int64_t *handle);

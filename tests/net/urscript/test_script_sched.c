@@ -2,7 +2,7 @@
  * tests/net/urscript/test_script_sched.c — the VM's threads and controller-clocked scheduling
  * against the fake controller: each tick every runnable thread runs (in creation order) until
  * it consumes time; shared globals, own locals; run/join/kill; critical sections; a thread that
- * never yields is UR's runtime error; the per-tick command stream is the same however late the
+ * uses up its slice computing is preempted, one that never yields is UR's runtime error; the per-tick command stream is the same however late the
  * runner is. */
 #include <math.h>
 #include <stdio.h>
@@ -183,6 +183,38 @@ static void test_sched__runaway_thread_is_too_much_behind_and_stops_the_program(
   assert_int_equal(E.kind, US_ERR_RUNTIME);
   assert_string_equal(E.text, "Runtime is too much behind");
   assert_true(E.line >= 4 && E.line <= 5);  // inside spin's loop
+}
+
+static void test_sched__a_computing_thread_is_preempted_and_the_others_run_in_its_frame(void **state) {
+  // UR's rule: a thread that uses up its slice computing is parked until the next frame, the
+  // others run in this one. URCL's script_commands thread loops on a read of its socket that
+  // fails at once when URCL closed it, until the body (reverse socket) ends the program; here
+  // spin polls a flag that count sets after it
+  int rc = run_text("def p():\n"
+                    "  global stop = False\n"
+                    "  thread spin():\n"
+                    "    while not stop:\n"
+                    "    end\n"
+                    "    set_standard_digital_out(1, True)\n"
+                    "  end\n"
+                    "  thread count():\n"
+                    "    set_standard_digital_out(0, True)\n"
+                    "    stop = True\n"
+                    "  end\n"
+                    "  a = run spin()\n"
+                    "  b = run count()\n"
+                    "  join a\n"
+                    "  join b\n"
+                    "end\n",
+                    1000);
+  if (rc != 0) {
+    fail_msg("run: %u:%u %s", E.line, E.column, E.text);
+  }
+  int c = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, 0), s = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, c + 1);
+  assert_true(c >= 0 && s > c);
+  assert_int_equal(F.cmd[c].index, 0);  // count ran in the frame where spin was preempted …
+  assert_int_equal(F.cmd[s].index, 1);  // … and spin saw the flag in the next one
+  assert_int_equal(F.cmd_vm_tick[s], F.cmd_vm_tick[c] + 1);
 }
 
 static void test_sched__kill_stops_a_thread_and_join_returns(void **state) {
@@ -391,6 +423,7 @@ int main(void) {
       cmocka_unit_test_setup(test_sched__same_stream_however_late_the_runner_is, setup),
       cmocka_unit_test_setup(test_sched__readings_are_their_ticks_however_late_the_runner_is, setup),
       cmocka_unit_test_setup(test_sched__runaway_thread_is_too_much_behind_and_stops_the_program, setup),
+      cmocka_unit_test_setup(test_sched__a_computing_thread_is_preempted_and_the_others_run_in_its_frame, setup),
       cmocka_unit_test_setup(test_sched__kill_stops_a_thread_and_join_returns, setup),
       cmocka_unit_test_setup(test_sched__critical_section_holder_runs_first_after_its_wait, setup),
       cmocka_unit_test_setup(test_sched__a_wait_inside_a_critical_section_lets_the_others_run, setup),

@@ -92,8 +92,9 @@ typedef struct urt_script_host {
 enum { URT_SCRIPT_REG_INT = 0, URT_SCRIPT_REG_DOUBLE = 1, URT_SCRIPT_REG_BIT = 2 };
 
 typedef struct urt_runner_config {
-  int64_t step_budget;   /* interpreter steps allowed between two controller ticks before
-                            "Runtime is too much behind" (0: default 200000)               */
+  int64_t step_budget;   /* interpreter steps a thread may run in one controller tick
+                            without waiting before it is preempted until the next; ten such
+                            slices in a row are "Runtime is too much behind" (0: 200000)    */
   int wait_timeout_ms;   /* timeout handed to wait_tick (0: default 20)                    */
   int rt_priority;       /* > 0: SCHED_FIFO priority of the script thread (best effort): a
                             real controller runs the script in its own cycle, so a script
