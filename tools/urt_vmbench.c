@@ -75,7 +75,7 @@ static void run_case(const char *name, const char *text, int ticks, bool last) {
                             .read_registers = b_read_registers,
                             .write_output_register = b_write_register};
   uint64_t motion_id = 0;
-  us_hooks hooks = {.host = &host, .motion_id = &motion_id, .step_budget = 200000,
+  us_hooks hooks = {.host = &host, .motion_id = &motion_id, .step_budget = 10000,
                     .wait_timeout_ms = 20};
   struct timespec t0, t1;
   clock_gettime(CLOCK_MONOTONIC, &t0);
@@ -132,17 +132,18 @@ int main(int argc, char **argv) {
            ticks);
   snprintf(sync_only, sizeof sync_only,
            "def idle():\n  i = 0\n  while i < %d:\n    sync()\n    i = i + 1\n  end\nend\n", ticks);
-  // a thread that computes 5000 loop iterations (~15000 steps) in each of its ticks: what one
-  // legal slice can cost (a thread is preempted after 200000 steps in one tick)
+  // a thread that computes 1250 loop iterations (~8750 steps) in each of its ticks: about what
+  // one slice can cost (a thread is preempted after 10000 steps in a tick, the emulator's
+  // default step_budget)
   snprintf(burst, sizeof burst,
-           "def burst():\n  k = 0\n  while k < %d:\n    i = 0\n    while i < 5000:\n"
+           "def burst():\n  k = 0\n  while k < %d:\n    i = 0\n    while i < 1250:\n"
            "      i = i + 1\n    end\n    sync()\n    k = k + 1\n  end\nend\n",
            ticks / 20 > 10 ? ticks / 20 : 10);
   printf("{\n  \"tool\": \"tools/urt_vmbench\",\n  \"period_us\": 2000,\n  \"cases\": {\n");
   run_case("sync_loop", sync_only, ticks, false);
   run_case("servoj_loop", servoj, ticks, false);
   run_case("servoj_and_io_thread", threads, ticks, false);
-  run_case("compute_5000_iterations_per_tick", burst, ticks, true);
+  run_case("compute_1250_iterations_per_tick", burst, ticks, true);
   printf("  }\n}\n");
   return 0;
 }

@@ -568,6 +568,8 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "urtwin: urscript slices taken late: %llu (at most %llu ticks behind)\n",
                (unsigned long long)es.script_tick.late_slices,
                (unsigned long long)es.script_tick.late_max);
+  std::fprintf(stderr, "urtwin: urscript threads preempted for computing a whole slice: %llu\n",
+               (unsigned long long)es.script_tick.preempted);
   urt_loop_stats_t s;
   urt_loop_get_stats(loop, &s);
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",

@@ -52,6 +52,7 @@ struct urt_runner {
   us_sockets *sockets;     /* the main program's sockets (runner thread only) */
   urt_exec_hist_t tick_cpu;  /* main programs' VM work per tick (runner thread writes) */
   uint64_t late_slices, late_max;  /* slices taken after their tick had passed (us_hooks) */
+  uint64_t preempted;              /* threads preempted for computing a whole slice (us_hooks) */
   /* the running main program (runner thread only) */
   uint64_t cur_seq, cur_stop;
 };
@@ -188,7 +189,8 @@ static void run_main(urt_runner_t *r, const unit *u) {
   us_hooks h = {.host = &r->host, .sockets = r->sockets, .motion_id = &r->motion_id,
                 .step_budget = r->cfg.step_budget, .wait_timeout_ms = r->cfg.wait_timeout_ms,
                 .poll = poll_main, .poll_ctx = r, .tick_cpu = &r->tick_cpu,
-                .late_slices = &r->late_slices, .late_max = &r->late_max};
+                .late_slices = &r->late_slices, .late_max = &r->late_max,
+                .preempted = &r->preempted};
   p->secondary = false;
   if (urt__us_run(p, &h, &e) != 0) {
     report(r, &e, false);
@@ -283,7 +285,7 @@ int urt_runner_create(const urt_script_host_t *host, const urt_runner_config_t *
     return URT_EINVAL;
   }
   if (r->cfg.step_budget <= 0) {
-    r->cfg.step_budget = 200000;
+    r->cfg.step_budget = 10000;
   }
   if (r->cfg.wait_timeout_ms <= 0) {
     r->cfg.wait_timeout_ms = 20;
@@ -407,4 +409,5 @@ void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out) 
   out->ticks = urt_exec_hist_count(&r->tick_cpu);
   out->late_slices = __atomic_load_n(&r->late_slices, __ATOMIC_RELAXED);
   out->late_max = __atomic_load_n(&r->late_max, __ATOMIC_RELAXED);
+  out->preempted = __atomic_load_n(&r->preempted, __ATOMIC_RELAXED);
 }

@@ -142,6 +142,9 @@ typedef struct us_hooks {
    * it was ahead (a runner descheduled: its commands reach a later tick than they were issued
    * for). Written by the runner thread with relaxed atomic stores. Nullable, both or neither. */
   uint64_t *late_slices, *late_max;
+  /* threads preempted for using up their slice computing (script_sched.c). Written by the
+   * runner thread with relaxed atomic stores. Nullable. */
+  uint64_t *preempted;
 } us_hooks;
 
 /* Run a parsed program to its end. Returns 0, or -1 with err filled. Context: the runner

@@ -111,6 +111,11 @@ typedef int (*take_fn)(us_sock *s, void *ctx);
 static int read_wait(vm *V, const us_node *n, const char *name, double timeout, take_fn take,
                      void *ctx, bool *ok) {
   *ok = false;
+  // a read is the program's I/O, not computing, even when it returns at once: a loop that
+  // reads a flooding peer (URCL's tool_contact_example writes its reverse socket in a loop
+  // without pause) or a closed socket (URCL's script_commands thread, until the program body
+  // ends it) is preempted at the end of each slice like any other, but is not too much behind
+  V->steps = 0;
   us_sockets *t = table(V, n);
   if (!t) return X_ERR;
   uint64_t limit = timeout_ticks(V, timeout), start = V->tick;

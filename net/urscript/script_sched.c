@@ -11,9 +11,9 @@
  * heavy instructions (such as an infinite loop that do not control the robot) it is placed in a
  * non-runnable state, and is not allowed to run until the next frame starts": a thread that ran
  * the step budget since it was resumed is preempted (urt__us_preempt) at its next statement or
- * loop turn, and the others run in this frame. One that goes on computing without ever waiting,
- * TOO_MUCH_BEHIND_SLICES slices in a row, is "Runtime is too much behind" (script_interp.c) and
- * stops the program.
+ * loop turn, and the others run in this frame. One that goes on computing without ever waiting
+ * or reading a socket, TOO_MUCH_BEHIND_SLICES slices in a row, is "Runtime is too much behind"
+ * (script_interp.c) and stops the program.
  *
  * Time is counted, not measured: the scheduler processes ticks one after the other (tick+1
  * after tick, never skipping when the host is ahead because the runner woke late), so the same
@@ -195,6 +195,9 @@ int urt__us_yield(vm *V) {
 int urt__us_preempt(vm *V, const us_node *at) {
   if (V->prog->secondary) {
     return urt__us_fail(V, at, "Runtime is too much behind");
+  }
+  if (V->h->preempted) {
+    __atomic_store_n(V->h->preempted, *V->h->preempted + 1, __ATOMIC_RELAXED);
   }
   int64_t steps = V->steps;
   if (urt__us_yield(V) != X_OK) {

@@ -16,9 +16,10 @@
 
 #define MAX_CALL_DEPTH URT_SCRIPT_MAX_DEPTH
 #define MAX_ARGS 8
-/* slices in a row that a thread may spend computing without waiting before the program stops
- * with "Runtime is too much behind" (each slice is step_budget steps; script_sched.c) */
-#define TOO_MUCH_BEHIND_SLICES 10
+/* slices in a row that a thread may spend computing, without a wait or a socket read, before
+ * the program stops with "Runtime is too much behind" (each slice is step_budget steps;
+ * script_sched.c). Ours, not UR's: UR documents only that such a thread is preempted. */
+#define TOO_MUCH_BEHIND_SLICES 20
 
 //---- values ----
 
@@ -119,7 +120,7 @@ typedef struct vm {
    * starts in that same tick continues the stream (urt__us_wait_scaled) */
   double motion_carry;
   uint64_t motion_carry_tick;
-  int64_t steps;    /* steps since this thread last waited (consumed controller time) */
+  int64_t steps;    /* steps since this thread last waited or read a socket */
   int64_t slice;    /* steps since this thread was last resumed (its share of this frame) */
   urt_snapshot_t snap;
 } vm;

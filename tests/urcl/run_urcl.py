@@ -30,6 +30,7 @@ If ../shared (URCL's sources) is absent, everything is skipped with a message.
 
 import argparse
 import fcntl
+import glob
 import json
 import os
 import re
@@ -318,19 +319,22 @@ def main():
         if n not in VERSIONS:
             raise SystemExit(f"unknown version {n!r}: {', '.join(VERSIONS)}")
     os.makedirs(args.work, exist_ok=True)
+    for old in glob.glob(os.path.join(args.work, "retry[0-9]*")):
+        shutil.rmtree(old, ignore_errors=True)  # an earlier run's retries
     netns = netns_available()
     jobs = max(1, args.jobs) if netns else 1
     print(f"URCL run: versions {', '.join(names)}; "
           f"{'one network namespace each' if netns else 'host network namespace'}, "
           f"{jobs} at a time; waiting for {LOCK}", flush=True)
 
-    def child(n, part_path, filt):
-        """the command that runs version n (only what filt matches) into part_path"""
+    def child(n, part_path, filt, work=None):
+        """the command that runs version n (only what filt matches) into part_path, in
+        work/<n> (default: --work)"""
         if os.path.exists(part_path):
             os.unlink(part_path)
         cmd = [sys.executable, os.path.abspath(__file__), "--one", n, "--out", part_path,
                "--src", args.src, "--build", args.build, "--urtwin", args.urtwin,
-               "--work", args.work, "--exclusions", args.exclusions]
+               "--work", work or args.work, "--exclusions", args.exclusions]
         if filt:
             cmd += ["--filter", filt]
         if not args.examples:
@@ -369,14 +373,21 @@ def main():
         # often with the other version's urtwin and URCL running beside it (README.md); a
         # test that fails for a cause of urtwin's fails twice.
         expected = read_expected(args.expected) if args.retries > 0 else set()
+        retry_no = 0
         for n in names:
             for test_id, rec in list(parts[n]["results"].items()):
                 if (rec["status"] in ("passed", "skipped", "excluded") or "watched" in rec
                         or f"{n}/{test_id}" not in expected):
                     continue
-                part_path = os.path.join(args.work, f"{n}.retry.json")
+                # each retry in a work folder of its own: the first attempt's logs stay in
+                # work/<n>, and those of every retry beside them
+                retry_no += 1
+                retry_work = os.path.join(args.work, f"retry{retry_no}")
+                part_path = os.path.join(retry_work, f"{n}.retry.json")
+                os.makedirs(retry_work, exist_ok=True)
                 started = time.monotonic()
-                rc = subprocess.run(child(n, part_path, "^" + re.escape(test_id) + "$")).returncode
+                rc = subprocess.run(child(n, part_path, "^" + re.escape(test_id) + "$",
+                                          retry_work)).returncode
                 again = None
                 if rc == 0 and os.path.exists(part_path):
                     with open(part_path) as f:
@@ -388,6 +399,7 @@ def main():
                                           if k in rec}
                 parts[n]["results"][test_id] = again
                 parts[n]["seconds"] = round(parts[n]["seconds"] + time.monotonic() - started, 1)
+                again["retry_logs"] = os.path.relpath(os.path.join(retry_work, n, "logs"), ROOT)
                 if args.verbose:
                     print(f"  {n}/{test_id}: retried alone, {again['status']}", flush=True)
     finally:
@@ -418,7 +430,8 @@ def main():
                 msg = first.get("message", "")
                 shown = msg if len(msg) <= 200 else msg[:50] + " ... " + msg[-150:]
                 print(f"  retried  {test_id}: {first['status']} at first ({shown}); "
-                      f"{rec['status']} when run again alone on a fresh urtwin")
+                      f"{rec['status']} when run again alone on a fresh urtwin "
+                      f"(its logs: {rec.get('retry_logs', '?')})")
     print(f"\nwall time of the URCL run: {wall:.0f} s")
 
     passed = {f"{n}/{t}" for n, part in parts.items() for t, rec in part["results"].items()

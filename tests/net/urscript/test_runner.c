@@ -183,6 +183,10 @@ static void test_runner__busy_loop_is_too_much_behind(void **state) {
   assert_int_equal(F.msg[1].kind, URT_SCRIPT_MSG_RUNTIME_EXCEPTION);
   assert_string_equal(F.msg[1].text, "Runtime is too much behind");
   assert_key(2, "PROGRAM_XXX_STOPPED", "spin");
+  // 19 slices preempted, the 20th the error (script_vm.h: TOO_MUCH_BEHIND_SLICES)
+  urt_runner_tick_stats_t st;
+  urt_runner_tick_stats(R, &st);
+  assert_int_equal(st.preempted, 19);
 }
 
 static void test_runner__motion_ids_increase_across_programs(void **state) {

@@ -286,6 +286,33 @@ static void test_socket__peer_that_closes_fails_reads_at_once(void **state) {
   assert_msg(3, "", 8);
 }
 
+static void test_socket__a_thread_polling_a_closed_socket_is_preempted_not_stopped(void **state) {
+  // URCL's script_commands thread: a read with timeout 0 in a loop. Once the peer has closed
+  // (tick 8) the read fails at once and the loop never waits; it is preempted at the end of
+  // each slice (100000 steps here), the body goes on and ends it at tick 50. Before, it was
+  // "Runtime is too much behind" in the first tick after the close.
+  fix_at(&X, 8, NULL, 0);
+  must_run("def p():\n"
+           "  global stop = False\n"
+           "  global fails = 0\n"
+           "  thread poll():\n"
+           "    while not stop:\n"
+           "      r = socket_read_binary_integer(1, \"s\", 0)\n"
+           "      if r[0] == 0:\n"
+           "        fails = fails + 1\n"
+           "      end\n"
+           "    end\n"
+           "  end\n"
+           "  socket_open(\"127.0.0.1\", %d, \"s\")\n"
+           "  h = run poll()\n"
+           "  sleep(0.1)\n"
+           "  stop = True\n"
+           "  join h\n"
+           "  textmsg(fails > 1000)\n"
+           "end\n");
+  assert_msg(0, "True", 52);  // opened at tick 1, stopped at 51, joined at 52
+}
+
 static void test_socket__sends_reach_the_peer(void **state) {
   must_run("socket_open(\"127.0.0.1\", %d, \"o\")\n"
            "socket_send_int(-2, \"o\")\n"
@@ -514,6 +541,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_socket__peer_that_closes_fails_reads_at_once, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__bytes_that_arrive_while_the_slice_runs_are_read_the_next_tick, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__a_flooding_peer_is_drained_one_buffer_per_tick, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__a_thread_polling_a_closed_socket_is_preempted_not_stopped, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__sends_reach_the_peer, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__get_var_round_trip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__sends_have_nodelay, setup, teardown),

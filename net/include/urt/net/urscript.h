@@ -92,9 +92,10 @@ typedef struct urt_script_host {
 enum { URT_SCRIPT_REG_INT = 0, URT_SCRIPT_REG_DOUBLE = 1, URT_SCRIPT_REG_BIT = 2 };
 
 typedef struct urt_runner_config {
-  int64_t step_budget;   /* interpreter steps a thread may run in one controller tick
-                            without waiting before it is preempted until the next; ten such
-                            slices in a row are "Runtime is too much behind" (0: 200000)    */
+  int64_t step_budget;   /* a thread's slice: interpreter steps it may run in one controller
+                            tick without waiting before it is preempted until the next; 20
+                            slices in a row without a wait or a socket read are "Runtime is
+                            too much behind" (0: 10000)                                    */
   int wait_timeout_ms;   /* timeout handed to wait_tick (0: default 20)                    */
   int rt_priority;       /* > 0: SCHED_FIFO priority of the script thread (best effort): a
                             real controller runs the script in its own cycle, so a script
@@ -144,6 +145,9 @@ typedef struct urt_runner_tick_stats {
   /* slices the runner took after the controller had passed their tick (descheduled: their
    * commands reach a later tick), and the most ticks it was behind */
   uint64_t late_slices, late_max;
+  /* URScript threads preempted until the next tick for running a whole slice (step_budget
+   * steps) without waiting: a program computing more than UR's time slice, or spinning */
+  uint64_t preempted;
 } urt_runner_tick_stats_t;
 void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out);
 
