@@ -154,8 +154,8 @@ int urt__us_yield(vm *V);
 
 /* The running thread used up its slice computing (step_budget steps since it was resumed): it
  * is not run again before the next frame, but it did not wait, so its steps since its last wait
- * keep counting. X_ERR when killed or stopped meanwhile, or in a secondary program (which must
- * finish in one frame: "Runtime is too much behind"). */
+ * keep counting. X_ERR when killed or stopped meanwhile. A secondary program runs on within
+ * its one cycle (step() stops it at TOO_MUCH_BEHIND_SLICES slices, as any thread). */
 int urt__us_preempt(vm *V, const us_node *at);
 
 /* run name() → *handle; join h; kill h; enter_critical / exit_critical */

@@ -166,6 +166,20 @@ static void test_runner__sec_program_errors_are_secondary_exceptions(void **stat
   assert_int_equal(fake_find_cmd(&F, URT_CTRL_MOVEJ, 0), -1);
 }
 
+static void test_runner__sec_program_computes_past_a_slice_within_its_cycle(void **state) {
+  // ~70000 steps, more than a slice (20000 here): a secondary program is not preempted (it has
+  // one cycle), only the whole budget (20 slices) stops it
+  submit("sec s():\n  i = 0\n  while i < 10000:\n    i = i + 1\n  end\n"
+         "  set_standard_digital_out(2, True)\nend\n");
+  wait_idle();
+  assert_int_equal(F.n_msg, 0);
+  assert_true(F.s.digital_out & (1u << 2));
+  submit("sec s():\n  while True:\n  end\nend\n");
+  wait_idle();
+  assert_int_equal(F.n_msg, 1);
+  assert_key(0, "SECONDARY_PROGRAM_EXCEPTION_XXX", "Runtime is too much behind");
+}
+
 static void test_runner__stop_ends_the_program(void **state) {
   submit("def forever():\n  while True:\n    sync()\n  end\nend\n");
   wait_msgs(1);
@@ -221,6 +235,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_runner__single_statement_aborts_the_program, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__sec_program_runs_alongside, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__sec_program_errors_are_secondary_exceptions, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_runner__sec_program_computes_past_a_slice_within_its_cycle, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__stop_ends_the_program, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__busy_loop_is_too_much_behind, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__motion_ids_increase_across_programs, setup, teardown),
