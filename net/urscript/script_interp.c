@@ -250,9 +250,9 @@ static int step(vm *V, const us_node *at) {
 
 /* A statement's start or a loop's next turn: where a thread that has used up its slice
  * (step_budget steps since it was resumed) gives the frame to the others (script_sched.c). */
-static int turn(vm *V, const us_node *at) {
+static int turn(vm *V) {
   if (V->slice >= V->h->step_budget) {
-    return urt__us_preempt(V, at);
+    return urt__us_preempt(V);
   }
   return X_OK;
 }
@@ -713,7 +713,7 @@ static int exec_assign(vm *V, const us_node *n) {
 }
 
 static int exec_stmt(vm *V, const us_node *n) {
-  if (turn(V, n) != X_OK || step(V, n) != X_OK) return X_ERR;
+  if (turn(V) != X_OK || step(V, n) != X_OK) return X_ERR;
   size_t mark = V->used;
   int rc = X_OK;
   switch (n->kind) {
@@ -770,7 +770,7 @@ static int exec_stmt(vm *V, const us_node *n) {
       for (bool again = false;; again = true) {
         sv c;
         V->used = mark;
-        if (again && (rc = turn(V, n)) != X_OK) break;
+        if (again && (rc = turn(V)) != X_OK) break;
         rc = eval(V, n->a, &c);
         if (rc != X_OK || !truthy(&c)) break;
         V->used = mark;

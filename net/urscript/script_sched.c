@@ -192,8 +192,7 @@ int urt__us_yield(vm *V) {
   return X_OK;
 }
 
-int urt__us_preempt(vm *V, const us_node *at) {
-  (void)at;
+int urt__us_preempt(vm *V) {
   if (V->prog->secondary) {
     // it runs within one cycle, unpreempted, until step() stops it at the whole budget
     V->slice = 0;

@@ -156,7 +156,7 @@ int urt__us_yield(vm *V);
  * is not run again before the next frame, but it did not wait, so its steps since its last wait
  * keep counting. X_ERR when killed or stopped meanwhile. A secondary program runs on within
  * its one cycle (step() stops it at TOO_MUCH_BEHIND_SLICES slices, as any thread). */
-int urt__us_preempt(vm *V, const us_node *at);
+int urt__us_preempt(vm *V);
 
 /* run name() → *handle; join h; kill h; enter_critical / exit_critical */
 int urt__us_thread_run(vm *V, const us_node *at, const us_node *def, int64_t *handle);
