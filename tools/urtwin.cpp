@@ -184,20 +184,20 @@ void print_lcm_stats(const urt_lcm_bridge_t* b) {
 }
 
 // one line the tests parse: "urtwin: dds: ticks N lost N drive N/N lost N, write errors N,
-// commands received N accepted N invalid N refused N dropped N"
+// commands received N accepted N invalid N refused N dropped N, trajectory ticks late N"
 void print_dds_stats(const urt_dds_bridge_t* b) {
   urt_dds_stats_t d;
   urt_dds_bridge_get_stats(b, &d);
   std::fprintf(stderr,
                "urtwin: dds: ticks %llu lost %llu, drive messages %llu samples %llu lost %llu, "
                "write errors %llu, commands received %llu accepted %llu invalid %llu refused %llu "
-               "dropped %llu\n",
+               "dropped %llu, trajectory ticks late %llu\n",
                (unsigned long long)d.ticks_published, (unsigned long long)d.ticks_lost,
                (unsigned long long)d.drive_messages, (unsigned long long)d.drive_samples,
                (unsigned long long)d.drive_lost, (unsigned long long)d.write_errors,
                (unsigned long long)d.cmd_received, (unsigned long long)d.cmd_accepted,
                (unsigned long long)d.cmd_invalid, (unsigned long long)d.cmd_refused,
-               (unsigned long long)d.cmd_dropped);
+               (unsigned long long)d.cmd_dropped, (unsigned long long)d.traj_ticks_late);
 }
 
 }  // namespace

@@ -83,7 +83,8 @@ static const endpoint_spec_t kReaders[R_COUNT] = {
 
 typedef struct counters {
   _Atomic uint64_t ticks_published, ticks_lost, drive_messages, drive_samples, drive_lost,
-      write_errors, cmd_received, cmd_accepted, cmd_invalid, cmd_refused, cmd_dropped;
+      write_errors, cmd_received, cmd_accepted, cmd_invalid, cmd_refused, cmd_dropped,
+      traj_ticks_late;
 } counters_t;
 
 struct urt_dds_bridge {
@@ -104,7 +105,7 @@ struct urt_dds_bridge {
   uint64_t cmd_id;
   urt_dds_traj_t traj;
   int traj_active;
-  double traj_t0;             /* controller time of the trajectory's start [s] */
+  urt_dds_traj_clock_t traj_clock;
   uint64_t traj_last_tick;
   counters_t n;
 };
@@ -426,12 +427,13 @@ static int may_command(urt_dds_bridge_t *b, urt_snapshot_t *s) {
          s->safety_mode == URT_SAFETY_MODE_NORMAL;
 }
 
-static void submit(urt_dds_bridge_t *b, const urt_ctrl_cmd_t *cmd) {
+static int submit(urt_dds_bridge_t *b, const urt_ctrl_cmd_t *cmd) {
   if (urt_loop_submit(b->loop, b->producer, cmd)) {
     b->cmd_id = cmd->id;
-  } else {
-    bump(&b->n.cmd_dropped, 1);
+    return 1;
   }
+  bump(&b->n.cmd_dropped, 1);
+  return 0;
 }
 
 static void end_trajectory(urt_dds_bridge_t *b) {
@@ -494,31 +496,42 @@ static void on_trajectory(urt_dds_bridge_t *b, const trajectory_msgs_msg_dds__Jo
   // start: the header's stamp (wall clock) when given, else the next tick
   int64_t stamp = (int64_t)msg->header.stamp.sec * 1000000000 + msg->header.stamp.nanosec;
   int64_t epoch = atomic_load(&b->epoch_ns);
-  b->traj_t0 = s.time + s.period;
+  double t0 = s.time + s.period;
   if (stamp != 0 && epoch != 0) {
     double t = (double)(stamp - epoch) * 1e-9;
-    b->traj_t0 = t > b->traj_t0 ? t : b->traj_t0;  // JTC: a start in the past is now
+    t0 = t > t0 ? t : t0;  // JTC: a start in the past is now
   }
+  urt_dds_traj_clock_start(&b->traj_clock, t0);
   b->traj_last_tick = s.tick;
   bump(&b->n.cmd_accepted, 1);
 }
 
-// one DIRECT set-point per tick: the trajectory where the next period ends
+// One DIRECT set-point per tick: the trajectory where the next period ends, on the
+// trajectory's own clock (dds_trajectory.h): when this thread is late the arm holds the last
+// set-point and the trajectory resumes from it, late, along the same path. Sampled at the
+// controller's clock instead, the first set-point after a 150 ms stall of this thread was a
+// step the joints cannot make in a period, and the controller protective-stopped mid-way.
 static void step_trajectory(urt_dds_bridge_t *b) {
   urt_snapshot_t s;
   uint64_t newest = urt_loop_wait(b->loop, b->traj_last_tick, 5);
   if (newest == b->traj_last_tick) {
     return;
   }
+  if (newest - b->traj_last_tick > 1 && !isnan(b->traj_clock.next)) {
+    bump(&b->n.traj_ticks_late, newest - b->traj_last_tick - 1);
+  }
   b->traj_last_tick = newest;
   if (!may_command(b, &s)) {
     end_trajectory(b);  // stopped, protective stop, local: the trajectory is over
     return;
   }
-  double tau = s.time + 2.0 * s.period - b->traj_t0;
+  double tau = urt_dds_traj_clock_at(&b->traj_clock, s.time + 2.0 * s.period);
   urt_ctrl_cmd_t cmd = {.kind = URT_CTRL_DIRECT, .id = b->cmd_id + 1};
   urt_dds_traj_eval(&b->traj, tau, cmd.q, cmd.qd);
-  submit(b, &cmd);
+  if (!submit(b, &cmd)) {
+    return;  // the ring was full: the same set-point again next tick
+  }
+  urt_dds_traj_clock_sent(&b->traj_clock, tau, s.period);
   if (tau >= urt_dds_traj_duration(&b->traj)) {
     end_trajectory(b);  // the last set-point holds (DIRECT keeps it)
   }
@@ -750,4 +763,5 @@ void urt_dds_bridge_get_stats(const urt_dds_bridge_t *b, urt_dds_stats_t *out) {
   out->cmd_invalid = atomic_load(&n->cmd_invalid);
   out->cmd_refused = atomic_load(&n->cmd_refused);
   out->cmd_dropped = atomic_load(&n->cmd_dropped);
+  out->traj_ticks_late = atomic_load(&n->traj_ticks_late);
 }

@@ -1,8 +1,10 @@
 /* SPDX-License-Identifier: Apache-2.0
  * net/dds/dds_trajectory.c — sampling a joint trajectory by segment splines, as
- * joint_trajectory_controller does (linear, cubic or quintic by what the points give). */
+ * joint_trajectory_controller does (linear, cubic or quintic by what the points give), and the
+ * trajectory's own clock. */
 #include "urt/net/dds_trajectory.h"
 
+#include <math.h>
 #include <stdlib.h>
 
 // one joint over one segment of length T from (q0, v0, a0) to (q1, v1, a1) at time s in [0, T]
@@ -56,6 +58,19 @@ void urt_dds_traj_eval(const urt_dds_traj_t *tr, double t, double q[URT_NJ], dou
   for (int j = 0; j < URT_NJ; j++) {
     segment(kind, T, a->q[j], a->qd[j], a->qdd[j], b->q[j], b->qd[j], b->qdd[j], s, &q[j], &qd[j]);
   }
+}
+
+void urt_dds_traj_clock_start(urt_dds_traj_clock_t *c, double t0) {
+  c->t0 = t0;
+  c->next = NAN;
+}
+
+double urt_dds_traj_clock_at(const urt_dds_traj_clock_t *c, double end) {
+  return isnan(c->next) ? end - c->t0 : c->next;
+}
+
+void urt_dds_traj_clock_sent(urt_dds_traj_clock_t *c, double tau, double period) {
+  c->next = tau + period;
 }
 
 void urt_dds_traj_free(urt_dds_traj_t *tr) {

@@ -40,7 +40,8 @@ def dds_stats(err: bytes):
     keys = {"ticks": r"ticks (\d+)", "ticks_lost": r"ticks \d+ lost (\d+)",
             "drive_messages": r"drive messages (\d+)", "write_errors": r"write errors (\d+)",
             "received": r"received (\d+)", "accepted": r"accepted (\d+)",
-            "invalid": r"invalid (\d+)", "refused": r"refused (\d+)", "dropped": r"dropped (\d+)"}
+            "invalid": r"invalid (\d+)", "refused": r"refused (\d+)", "dropped": r"dropped (\d+)",
+            "traj_late": r"trajectory ticks late (\d+)"}
     return {k: int(re.search(rx, lines[-1]).group(1)) for k, rx in keys.items()}
 
 
@@ -523,7 +524,8 @@ def test_joint_trajectory_of_three_points_ends_within_1_mrad():
     assert min(abs(s.position[0] - points[0][0]) + abs(s.position[2] - points[0][2])
                for s in got) < 5e-3
     assert st["accepted"] == 1 and st["invalid"] == 0
-    print(f"trajectory: final error {err * 1e3:.4f} mrad")
+    assert st["dropped"] == 0
+    print(f"trajectory: final error {err * 1e3:.4f} mrad, ticks held late {st['traj_late']}")
 
 
 def test_commands_refused_in_local_control():

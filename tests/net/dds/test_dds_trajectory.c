@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0
  * tests/net/dds/test_dds_trajectory.c — segment splines (linear, cubic, quintic) hit their
- * points with the given velocities, hold after the end; trajectory checks refuse bad shapes. */
+ * points with the given velocities, hold after the end; a late sender delays the trajectory and
+ * never skips part of it; trajectory checks refuse bad shapes. */
 #include <math.h>
 #include <string.h>
 
@@ -72,6 +73,65 @@ static void test_traj__holds_the_last_point_at_rest(void **state) {
     assert_true(qd[j] == 0.0);
   }
   assert_near(urt_dds_traj_duration(&tr), 2.0, 0.0);
+}
+
+//---- the trajectory's clock ---------------------------------------------------------------
+
+// The bridge's loop for one set-point per tick (dds_bridge.c, step_trajectory), with the
+// command thread asleep over ticks [late_from, late_from + late_for): it sends nothing then and
+// sees the newest tick when it wakes. Returns the largest step between consecutive set-points
+// of joint 0 and the set-points sent in q_sent (one per send).
+static double run_ticks(const urt_dds_traj_t *tr, int ticks, int late_from, int late_for,
+                        double *q_sent, int *n_sent) {
+  const double period = 0.002;
+  urt_dds_traj_clock_t c;
+  urt_dds_traj_clock_start(&c, period);  // accepted at tick 0: the start is the next tick
+  double prev = tr->p[0].q[0], step_max = 0.0;
+  *n_sent = 0;
+  for (int k = 0; k < ticks; k++) {
+    if (k >= late_from && k < late_from + late_for) {
+      continue;
+    }
+    double time = k * period, q[URT_NJ], qd[URT_NJ];
+    double tau = urt_dds_traj_clock_at(&c, time + 2.0 * period);
+    urt_dds_traj_eval(tr, tau, q, qd);
+    urt_dds_traj_clock_sent(&c, tau, period);
+    step_max = fmax(step_max, fabs(q[0] - prev));
+    prev = q[0];
+    q_sent[(*n_sent)++] = q[0];
+  }
+  return step_max;
+}
+
+static void test_clock__a_late_thread_delays_the_trajectory_never_skips_it(void **state) {
+  urt_dds_traj_point_t p[2];
+  urt_dds_traj_t tr = two_points(1, 0, p);  // 2 s, cubic, joint 0 from 0 to 1 rad
+  static double on_time[2000], late[2000];
+  int n_on, n_late;
+  double step_on = run_ticks(&tr, 1200, 0, 0, on_time, &n_on);
+  // asleep 150 ms (75 ticks) mid-way, as a descheduled host thread was in a failed CI run
+  double step_late = run_ticks(&tr, 1200, 500, 75, late, &n_late);
+  assert_int_equal(n_on, 1200);
+  assert_int_equal(n_late, 1200 - 75);
+  // the same set-points in the same order: the path is the same, only later
+  for (int i = 0; i < n_late; i++) {
+    assert_true(late[i] == on_time[i]);
+  }
+  // no step larger than on time
+  assert_true(step_late <= step_on);
+  assert_true(step_on < 3.0 * 0.002);  // ≤ 1.5 rad/s peak for this cubic: no step to refuse
+}
+
+static void test_clock__on_time_it_is_the_controllers_clock(void **state) {
+  urt_dds_traj_clock_t c;
+  urt_dds_traj_clock_start(&c, 1.0);
+  double tau = urt_dds_traj_clock_at(&c, 0.6);  // a start 0.4 s ahead (header stamp)
+  assert_near(tau, -0.4, 1e-15);
+  for (int k = 1; k <= 1000; k++) {
+    urt_dds_traj_clock_sent(&c, tau, 0.002);
+    tau = urt_dds_traj_clock_at(&c, 0.6 + k * 0.002);
+    assert_near(tau, -0.4 + k * 0.002, 1e-12);
+  }
 }
 
 //---- from a message -----------------------------------------------------------------------
@@ -200,6 +260,8 @@ int main(void) {
       cmocka_unit_test(test_traj__cubic_hits_ends_with_their_velocities),
       cmocka_unit_test(test_traj__quintic_hits_ends_with_velocity_and_acceleration),
       cmocka_unit_test(test_traj__holds_the_last_point_at_rest),
+      cmocka_unit_test(test_clock__a_late_thread_delays_the_trajectory_never_skips_it),
+      cmocka_unit_test(test_clock__on_time_it_is_the_controllers_clock),
       cmocka_unit_test(test_from_msg__maps_by_name_and_starts_at_the_setpoint),
       cmocka_unit_test(test_from_msg__refuses_bad_shapes_and_values),
       cmocka_unit_test(test_forward__servoj_speedj_and_refusals),

@@ -58,6 +58,7 @@ typedef struct urt_dds_stats {
   uint64_t cmd_invalid;      /* wrong length, NaN/Inf, bad joint names or times               */
   uint64_t cmd_refused;      /* valid, but not in remote control / not RUNNING + NORMAL       */
   uint64_t cmd_dropped;      /* valid, but the command ring was full                          */
+  uint64_t traj_ticks_late;  /* ticks a running trajectory was held: this thread was late      */
 } urt_dds_stats_t;
 
 typedef struct urt_dds_bridge urt_dds_bridge_t;

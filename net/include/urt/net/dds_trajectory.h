@@ -41,6 +41,25 @@ double urt_dds_traj_duration(const urt_dds_traj_t *tr);
 
 void urt_dds_traj_free(urt_dds_traj_t *tr);
 
+/* The trajectory's own clock. The bridge sends one set-point per controller tick; the time it
+ * samples advances one period per set-point sent, not by the ticks that passed, so a command
+ * thread that runs late (descheduled, or its ring full) delays the rest of the trajectory and
+ * never skips part of it: a skipped stretch is a set-point step the joints cannot make in one
+ * period, which the controller protective-stops (direct_jump_joints). On time, it is the
+ * controller's clock. */
+typedef struct urt_dds_traj_clock {
+  double t0;    /* controller time of the trajectory's start [s]                              */
+  double next;  /* trajectory time of the next set-point [s]; NAN until the first is sent      */
+} urt_dds_traj_clock_t;
+
+void urt_dds_traj_clock_start(urt_dds_traj_clock_t *c, double t0);
+
+/* Trajectory time of the set-point for the period ending at controller time `end` [s]. */
+double urt_dds_traj_clock_at(const urt_dds_traj_clock_t *c, double end);
+
+/* The set-point at trajectory time tau was sent; the next one is a period later. */
+void urt_dds_traj_clock_sent(urt_dds_traj_clock_t *c, double tau, double period);
+
 #ifdef __cplusplus
 }
 #endif
