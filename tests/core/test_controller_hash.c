@@ -189,21 +189,13 @@ static void run_until_done(rig_t *r, uint64_t id, double t_max, double t_after) 
   run(r, t_after);
 }
 
-static urt_ctrl_cmd_t cmd_of(rig_t *r, int kind) {
-  urt_ctrl_cmd_t c;
-  memset(&c, 0, sizeof c);
-  c.kind = kind;
-  c.id = r->next_id++;
-  return c;
-}
-
 static void send(rig_t *r, int kind) {
-  urt_ctrl_cmd_t c = cmd_of(r, kind);
+  urt_ctrl_cmd_t c = rig_cmd(r, kind);
   period(r, &c);
 }
 
 static urt_ctrl_cmd_t movej(rig_t *r, const double *q, double a, double v, double t) {
-  urt_ctrl_cmd_t c = cmd_of(r, URT_CTRL_MOVEJ);
+  urt_ctrl_cmd_t c = rig_cmd(r, URT_CTRL_MOVEJ);
   memcpy(c.q, q, sizeof c.q);
   c.a = a;
   c.v = v;
@@ -212,7 +204,7 @@ static urt_ctrl_cmd_t movej(rig_t *r, const double *q, double a, double v, doubl
 }
 
 static urt_ctrl_cmd_t movel(rig_t *r, const double *pose, double a, double v, double t) {
-  urt_ctrl_cmd_t c = cmd_of(r, URT_CTRL_MOVEL);
+  urt_ctrl_cmd_t c = rig_cmd(r, URT_CTRL_MOVEL);
   memcpy(c.pose, pose, sizeof c.pose);
   c.a = a;
   c.v = v;
@@ -221,7 +213,7 @@ static urt_ctrl_cmd_t movel(rig_t *r, const double *pose, double a, double v, do
 }
 
 static void slider(rig_t *r, double v) {
-  urt_ctrl_cmd_t c = cmd_of(r, URT_CTRL_SET_SPEED_SLIDER);
+  urt_ctrl_cmd_t c = rig_cmd(r, URT_CTRL_SET_SPEED_SLIDER);
   c.value = v;
   period(r, &c);
 }
@@ -336,7 +328,7 @@ static void sc_movel(rig_t *r) {
 
 static void sc_servo(rig_t *r) {
   go_work(r);
-  urt_ctrl_cmd_t s = cmd_of(r, URT_CTRL_SERVOJ);
+  urt_ctrl_cmd_t s = rig_cmd(r, URT_CTRL_SERVOJ);
   for (int k = 0; k < 400; k++) {
     memcpy(s.q, kWork, sizeof s.q);
     s.q[0] += 0.2 * sin(2.0 * M_PI * 0.5 * k * r->c->period);
@@ -347,12 +339,12 @@ static void sc_servo(rig_t *r) {
     period(r, &s);
   }
   run(r, 0.5);  // the stream stopped: decelerate
-  urt_ctrl_cmd_t b = cmd_of(r, URT_CTRL_SERVOJ);
+  urt_ctrl_cmd_t b = rig_cmd(r, URT_CTRL_SERVOJ);
   memcpy(b.q, r->c->q1, sizeof b.q);
   b.lookahead_time = 0.01;  // refused
   b.gain = 300.0;
   period(r, &b);
-  b = cmd_of(r, URT_CTRL_SERVOJ);
+  b = rig_cmd(r, URT_CTRL_SERVOJ);
   memcpy(b.q, r->c->q1, sizeof b.q);
   b.q[1] += 0.05;
   b.lookahead_time = 0.05;
@@ -362,7 +354,7 @@ static void sc_servo(rig_t *r) {
   run(r, 0.5);
   double p[6];
   pose_now(r, p);
-  urt_ctrl_cmd_t l = cmd_of(r, URT_CTRL_SERVOL);
+  urt_ctrl_cmd_t l = rig_cmd(r, URT_CTRL_SERVOL);
   for (int k = 0; k < 300; k++) {
     memcpy(l.pose, p, sizeof l.pose);
     l.pose[2] += 0.03 * sin(2.0 * M_PI * 1.0 * k * r->c->period);
@@ -372,7 +364,7 @@ static void sc_servo(rig_t *r) {
     period(r, &l);
   }
   run(r, 0.5);
-  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_SERVOJ);  // a target outside the limits: pstop
+  urt_ctrl_cmd_t bad = rig_cmd(r, URT_CTRL_SERVOJ);  // a target outside the limits: pstop
   memcpy(bad.q, r->c->q1, sizeof bad.q);
   bad.q[2] = 10.0;
   bad.lookahead_time = 0.1;
@@ -385,62 +377,62 @@ static void sc_servo(rig_t *r) {
 
 static void sc_speed(rig_t *r) {
   go_work(r);
-  urt_ctrl_cmd_t a = cmd_of(r, URT_CTRL_SPEEDJ);
+  urt_ctrl_cmd_t a = rig_cmd(r, URT_CTRL_SPEEDJ);
   a.q[0] = 0.3;
   a.q[2] = -0.2;
   a.a = 1.0;
   a.t = 0.6;
   period(r, &a);
   run(r, 1.0);
-  urt_ctrl_cmd_t b = cmd_of(r, URT_CTRL_SPEEDJ);  // without t, replaced, then stopj
+  urt_ctrl_cmd_t b = rig_cmd(r, URT_CTRL_SPEEDJ);  // without t, replaced, then stopj
   b.q[1] = -0.2;
   b.a = 2.0;
   period(r, &b);
   run(r, 0.4);
-  b = cmd_of(r, URT_CTRL_SPEEDJ);
+  b = rig_cmd(r, URT_CTRL_SPEEDJ);
   b.q[1] = 0.25;
   b.q[4] = 0.1;
   b.a = 3.0;
   period(r, &b);
   run(r, 0.3);
-  urt_ctrl_cmd_t sj = cmd_of(r, URT_CTRL_STOPJ);
+  urt_ctrl_cmd_t sj = rig_cmd(r, URT_CTRL_STOPJ);
   sj.a = 2.0;
   period(r, &sj);
   run(r, 0.4);
-  urt_ctrl_cmd_t l = cmd_of(r, URT_CTRL_SPEEDL);
+  urt_ctrl_cmd_t l = rig_cmd(r, URT_CTRL_SPEEDL);
   l.pose[0] = 0.05;
   l.pose[2] = -0.03;
   l.a = 0.5;
   l.t = 0.5;
   period(r, &l);
   run(r, 0.8);
-  l = cmd_of(r, URT_CTRL_SPEEDL);
+  l = rig_cmd(r, URT_CTRL_SPEEDL);
   l.pose[1] = 0.04;
   l.pose[5] = 0.2;
   l.a = 0.6;
   l.a_rot = 1.5;
   period(r, &l);
   run(r, 0.4);
-  urt_ctrl_cmd_t sl = cmd_of(r, URT_CTRL_STOPL);
+  urt_ctrl_cmd_t sl = rig_cmd(r, URT_CTRL_STOPL);
   sl.a = 0.8;
   period(r, &sl);
   run(r, 0.4);
-  l = cmd_of(r, URT_CTRL_SPEEDL);
+  l = rig_cmd(r, URT_CTRL_SPEEDL);
   l.pose[2] = 0.03;
   l.a = 0.5;
   period(r, &l);
   run(r, 0.2);
-  sl = cmd_of(r, URT_CTRL_STOPL);
+  sl = rig_cmd(r, URT_CTRL_STOPL);
   sl.a = 0.8;
   sl.a_rot = 2.0;
   period(r, &sl);
   run(r, 0.3);
-  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_SPEEDJ);  // refused, then too fast: limited
+  urt_ctrl_cmd_t bad = rig_cmd(r, URT_CTRL_SPEEDJ);  // refused, then too fast: limited
   bad.a = -1.0;
   period(r, &bad);
-  bad = cmd_of(r, URT_CTRL_STOPJ);
+  bad = rig_cmd(r, URT_CTRL_STOPJ);
   period(r, &bad);
-  bad = cmd_of(r, URT_CTRL_SPEEDJ);
+  bad = rig_cmd(r, URT_CTRL_SPEEDJ);
   bad.q[0] = 100.0;
   bad.a = 1.0;
   period(r, &bad);
@@ -451,7 +443,7 @@ static void sc_speed(rig_t *r) {
 
 static void sc_direct(rig_t *r) {
   go_work(r);
-  urt_ctrl_cmd_t d = cmd_of(r, URT_CTRL_DIRECT);
+  urt_ctrl_cmd_t d = rig_cmd(r, URT_CTRL_DIRECT);
   double q0[URT_NJ];
   memcpy(q0, r->c->q1, sizeof q0);
   for (int k = 0; k < 200; k++) {
@@ -468,7 +460,7 @@ static void sc_direct(rig_t *r) {
   run(r, 0.1);
   send(r, URT_CTRL_HALT);
   run(r, 0.3);
-  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_DIRECT);
+  urt_ctrl_cmd_t bad = rig_cmd(r, URT_CTRL_DIRECT);
   memcpy(bad.q, q0, sizeof bad.q);
   bad.qd[0] = 100.0;  // too fast: pstop
   period(r, &bad);
@@ -481,7 +473,7 @@ static void sc_servoc(rig_t *r) {
   go_work(r);
   double p[6];
   pose_now(r, p);
-  urt_ctrl_cmd_t s = cmd_of(r, URT_CTRL_SERVOC);
+  urt_ctrl_cmd_t s = rig_cmd(r, URT_CTRL_SERVOC);
   memcpy(s.pose, p, sizeof s.pose);
   s.pose[0] += 0.08;
   s.pose[5] += 0.2;
@@ -492,12 +484,12 @@ static void sc_servoc(rig_t *r) {
   s.pose[1] += 0.05;  // the same stream, a new goal
   period(r, &s);
   run_until_done(r, s.id, 4.0, 0.1);
-  urt_ctrl_cmd_t b = cmd_of(r, URT_CTRL_SERVOC);
+  urt_ctrl_cmd_t b = rig_cmd(r, URT_CTRL_SERVOC);
   memcpy(b.pose, p, sizeof b.pose);
   b.a = 0.0;  // refused
   b.v = 0.2;
   period(r, &b);
-  b = cmd_of(r, URT_CTRL_SERVOC);
+  b = rig_cmd(r, URT_CTRL_SERVOC);
   memcpy(b.pose, p, sizeof b.pose);
   b.a = 1.5;
   b.v = 0.3;
@@ -510,7 +502,7 @@ static void sc_servoc(rig_t *r) {
 
 static void sc_torque(rig_t *r) {
   go_work(r);
-  urt_ctrl_cmd_t t = cmd_of(r, URT_CTRL_TORQUE);
+  urt_ctrl_cmd_t t = rig_cmd(r, URT_CTRL_TORQUE);
   for (int k = 0; k < 250; k++) {
     for (int j = 0; j < URT_NJ; j++) {
       t.tau[j] = r->c->tau_model1[j] + r->c->tau_bias[j];
@@ -520,7 +512,7 @@ static void sc_torque(rig_t *r) {
     period(r, &t);
   }
   run(r, 0.5);  // the stream stopped: position control, stop, hold
-  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_TORQUE);
+  urt_ctrl_cmd_t bad = rig_cmd(r, URT_CTRL_TORQUE);
   bad.tau[1] = 1e6;  // above torque_max: pstop
   period(r, &bad);
   run(r, 0.1);
@@ -530,29 +522,29 @@ static void sc_torque(rig_t *r) {
 
 static void sc_freedrive(rig_t *r) {
   go_work(r);
-  urt_ctrl_cmd_t f = cmd_of(r, URT_CTRL_FREEDRIVE);
+  urt_ctrl_cmd_t f = rig_cmd(r, URT_CTRL_FREEDRIVE);
   f.index = 1;
   const double free_axes[6] = {1, 1, 0, 0, 0, 1};
   memcpy(f.q, free_axes, sizeof f.q);
   period(r, &f);
-  urt_ctrl_cmd_t w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  urt_ctrl_cmd_t w = rig_cmd(r, URT_CTRL_SET_WRENCH);
   w.pose[0] = 15.0;
   w.pose[2] = -10.0;
   w.pose[5] = 1.0;
   period(r, &w);
   run(r, 0.4);
-  w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  w = rig_cmd(r, URT_CTRL_SET_WRENCH);
   period(r, &w);
   run(r, 0.2);
-  urt_ctrl_cmd_t off = cmd_of(r, URT_CTRL_FREEDRIVE);
+  urt_ctrl_cmd_t off = rig_cmd(r, URT_CTRL_FREEDRIVE);
   off.index = 0;
   period(r, &off);
   run(r, 0.3);
-  urt_ctrl_cmd_t bad = cmd_of(r, URT_CTRL_FREEDRIVE);
+  urt_ctrl_cmd_t bad = rig_cmd(r, URT_CTRL_FREEDRIVE);
   bad.index = 1;
   bad.q[0] = 0.5;  // refused
   period(r, &bad);
-  f = cmd_of(r, URT_CTRL_FREEDRIVE);  // all free, in a feature frame, then HALT
+  f = rig_cmd(r, URT_CTRL_FREEDRIVE);  // all free, in a feature frame, then HALT
   f.index = 1;
   for (int i = 0; i < 6; i++) {
     f.q[i] = 1.0;
@@ -568,7 +560,7 @@ static void sc_force(rig_t *r) {
   go_work(r);
   double p[6];
   pose_now(r, p);
-  urt_ctrl_cmd_t f = cmd_of(r, URT_CTRL_FORCE_MODE);
+  urt_ctrl_cmd_t f = rig_cmd(r, URT_CTRL_FORCE_MODE);
   f.index = 2;
   f.q[2] = 1.0;  // z compliant
   f.tau[2] = -5.0;
@@ -576,16 +568,16 @@ static void sc_force(rig_t *r) {
     f.qd[i] = i == 2 ? 0.05 : 0.1;
   }
   period(r, &f);
-  urt_ctrl_cmd_t w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  urt_ctrl_cmd_t w = rig_cmd(r, URT_CTRL_SET_WRENCH);
   w.pose[2] = 3.0;
   period(r, &w);
   run(r, 0.3);
-  urt_ctrl_cmd_t l = cmd_of(r, URT_CTRL_SPEEDL);  // inside force mode
+  urt_ctrl_cmd_t l = rig_cmd(r, URT_CTRL_SPEEDL);  // inside force mode
   l.pose[0] = 0.02;
   l.a = 0.5;
   period(r, &l);
   run(r, 0.3);
-  urt_ctrl_cmd_t sl = cmd_of(r, URT_CTRL_STOPL);
+  urt_ctrl_cmd_t sl = rig_cmd(r, URT_CTRL_STOPL);
   sl.a = 0.5;
   period(r, &sl);
   run(r, 0.2);
@@ -611,17 +603,17 @@ static void sc_force(rig_t *r) {
   period(r, &mj);
   run_until_done(r, mj.id, 4.0, 0.1);
   // a tight deviation limit and a push on a held axis: protective stop
-  urt_ctrl_cmd_t g = cmd_of(r, URT_CTRL_FORCE_MODE);
+  urt_ctrl_cmd_t g = rig_cmd(r, URT_CTRL_FORCE_MODE);
   g.index = 2;
   g.q[2] = 1.0;
   g.qd[2] = 0.05;
   g.qd[0] = 1e-4;
   period(r, &g);
-  w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  w = rig_cmd(r, URT_CTRL_SET_WRENCH);
   w.pose[0] = 400.0;
   period(r, &w);
   run(r, 0.5);
-  w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  w = rig_cmd(r, URT_CTRL_SET_WRENCH);
   period(r, &w);
   send(r, URT_CTRL_UNLOCK_PSTOP);
   run(r, 0.1);
@@ -641,7 +633,7 @@ static void sc_states(rig_t *r) {
   run(r, 0.4);
   send(r, URT_CTRL_HALT);
   run(r, 0.5);
-  urt_ctrl_cmd_t s = cmd_of(r, URT_CTRL_SET_DIGITAL_OUT);
+  urt_ctrl_cmd_t s = rig_cmd(r, URT_CTRL_SET_DIGITAL_OUT);
   s.index = 3;
   s.value = 1.0;
   period(r, &s);
@@ -652,26 +644,26 @@ static void sc_states(rig_t *r) {
   period(r, &s);
   s.index = 18;  // refused
   period(r, &s);
-  s = cmd_of(r, URT_CTRL_SET_ANALOG_OUT);
+  s = rig_cmd(r, URT_CTRL_SET_ANALOG_OUT);
   s.index = 1;
   s.value = 0.25;
   period(r, &s);
   s.value = 1.5;  // refused
   period(r, &s);
-  s = cmd_of(r, URT_CTRL_SET_SPEED_SLIDER);
+  s = rig_cmd(r, URT_CTRL_SET_SPEED_SLIDER);
   s.value = 2.0;  // refused
   period(r, &s);
-  s = cmd_of(r, URT_CTRL_SET_TCP);
+  s = rig_cmd(r, URT_CTRL_SET_TCP);
   s.pose[2] = 0.1;
   s.pose[3] = 0.2;
   period(r, &s);
-  s = cmd_of(r, URT_CTRL_SET_PAYLOAD);
+  s = rig_cmd(r, URT_CTRL_SET_PAYLOAD);
   s.value = 1.5;
   s.pose[2] = 0.05;
   period(r, &s);
   s.value = -1.0;  // refused
   period(r, &s);
-  s = cmd_of(r, URT_CTRL_SET_GRAVITY);
+  s = rig_cmd(r, URT_CTRL_SET_GRAVITY);
   s.pose[2] = -9.7;
   s.pose[0] = 0.3;
   period(r, &s);
@@ -689,7 +681,7 @@ static void sc_states(rig_t *r) {
   send(r, URT_CTRL_POWER_ON);
   send(r, URT_CTRL_BRAKE_RELEASE);
   run(r, 0.1);
-  urt_ctrl_cmd_t w = cmd_of(r, URT_CTRL_SET_WRENCH);
+  urt_ctrl_cmd_t w = rig_cmd(r, URT_CTRL_SET_WRENCH);
   w.pose[0] = 2000.0;  // refused
   period(r, &w);
   urt_ctrl_cmd_t b = movej(r, kWork, 1.0, 1.0, 0.0);
@@ -698,7 +690,7 @@ static void sc_states(rig_t *r) {
 }
 
 static void sc_pause(rig_t *r) {
-  urt_ctrl_cmd_t play = cmd_of(r, URT_CTRL_PROGRAM_STATE);
+  urt_ctrl_cmd_t play = rig_cmd(r, URT_CTRL_PROGRAM_STATE);
   play.index = URT_PROGRAM_PLAYING;
   period(r, &play);
   go_work(r);
@@ -725,7 +717,7 @@ static void sc_pause(rig_t *r) {
   slider(r, 0.6);
   run_until_done(r, l.id, 5.0, 0.1);
   slider(r, 1.0);
-  urt_ctrl_cmd_t sj = cmd_of(r, URT_CTRL_SPEEDJ);  // streaming: PAUSE stops it
+  urt_ctrl_cmd_t sj = rig_cmd(r, URT_CTRL_SPEEDJ);  // streaming: PAUSE stops it
   sj.q[5] = 0.4;
   sj.a = 2.0;
   period(r, &sj);
@@ -739,7 +731,7 @@ static void sc_pause(rig_t *r) {
   run(r, 0.3);
   send(r, URT_CTRL_PAUSE);
   run(r, 0.1);
-  urt_ctrl_cmd_t stop = cmd_of(r, URT_CTRL_PROGRAM_STATE);
+  urt_ctrl_cmd_t stop = rig_cmd(r, URT_CTRL_PROGRAM_STATE);
   stop.index = URT_PROGRAM_STOPPED;
   period(r, &stop);
   run(r, 0.5);
@@ -763,13 +755,13 @@ static void sc_cb3(rig_t *r) {
   urt_ctrl_cmd_t l = movel(r, p, 1.2, 0.25, 0.0);
   period(r, &l);
   run_until_done(r, l.id, 4.0, 0.1);
-  urt_ctrl_cmd_t s = cmd_of(r, URT_CTRL_SPEEDL);
+  urt_ctrl_cmd_t s = rig_cmd(r, URT_CTRL_SPEEDL);
   s.pose[2] = 0.04;
   s.a = 0.5;
   s.t = 0.4;
   period(r, &s);
   run(r, 0.6);
-  urt_ctrl_cmd_t sv = cmd_of(r, URT_CTRL_SERVOJ);
+  urt_ctrl_cmd_t sv = rig_cmd(r, URT_CTRL_SERVOJ);
   for (int k = 0; k < 100; k++) {
     memcpy(sv.q, kWork, sizeof sv.q);
     sv.q[1] += 0.1 * sin(2.0 * M_PI * k * r->c->period);
@@ -779,16 +771,6 @@ static void sc_cb3(rig_t *r) {
     period(r, &sv);
   }
   run(r, 0.4);
-}
-
-static urt_ctrl_cmd_t tool_move(rig_t *r, int kind, const double *pose, double a, double v,
-                                double rad) {
-  urt_ctrl_cmd_t c = cmd_of(r, kind);
-  memcpy(c.pose, pose, sizeof c.pose);
-  c.a = a;
-  c.v = v;
-  c.r = rad;
-  return c;
 }
 
 /* planned paths (URT_MOTION_PATH, core/motion_path*.cpp): movej → movel → movep blended (r > 0),
@@ -809,19 +791,19 @@ static void sc_path(rig_t *r) {
   a.r = 0.05;
   period(r, &a);
   run_until_done(r, a.id, 5.0, 0.0);  // done early, still moving: the next one blends
-  urt_ctrl_cmd_t b = tool_move(r, URT_CTRL_MOVEL, p1, 1.2, 0.25, 0.04);
+  urt_ctrl_cmd_t b = rig_tool_move(r, URT_CTRL_MOVEL, p1, 1.2, 0.25, 0.04);
   period(r, &b);
   run(r, 0.1);
   slider(r, 0.5);  // the slider slows the path
   run_until_done(r, b.id, 5.0, 0.0);
-  urt_ctrl_cmd_t c = tool_move(r, URT_CTRL_MOVEP, p2, 1.2, 0.15, 0.03);
+  urt_ctrl_cmd_t c = rig_tool_move(r, URT_CTRL_MOVEP, p2, 1.2, 0.15, 0.03);
   period(r, &c);
   run(r, 0.1);
   slider(r, 1.0);
   run_until_done(r, c.id, 5.0, 0.0);
   // movec: an arc in the horizontal plane through a via point, turning back toward -x
   const double rho = 0.06;
-  urt_ctrl_cmd_t m = cmd_of(r, URT_CTRL_MOVEC);
+  urt_ctrl_cmd_t m = rig_cmd(r, URT_CTRL_MOVEC);
   m.q[0] = p2[0] - rho + rho * cos(M_PI / 3);
   m.q[1] = p2[1] + rho * sin(M_PI / 3);
   m.q[2] = p2[2];
@@ -838,7 +820,7 @@ static void sc_path(rig_t *r) {
   send(r, URT_CTRL_RESUME);
   run_until_done(r, m.id, 5.0, 0.1);
   // optimovej (fractions of the joints' limits) blended into an optimovel
-  urt_ctrl_cmd_t oj = cmd_of(r, URT_CTRL_OPTIMOVEJ);
+  urt_ctrl_cmd_t oj = rig_cmd(r, URT_CTRL_OPTIMOVEJ);
   memcpy(oj.q, kWork, sizeof oj.q);
   oj.q[0] -= 0.2;
   oj.q[2] -= 0.15;
@@ -850,7 +832,7 @@ static void sc_path(rig_t *r) {
   p3[1] += 0.05;
   period(r, &oj);
   run_until_done(r, oj.id, 5.0, 0.0);
-  urt_ctrl_cmd_t ol = tool_move(r, URT_CTRL_OPTIMOVEL, p3, 0.1, 0.2, 0.0);
+  urt_ctrl_cmd_t ol = rig_tool_move(r, URT_CTRL_OPTIMOVEL, p3, 0.1, 0.2, 0.0);
   period(r, &ol);
   run_until_done(r, ol.id, 5.0, 0.2);
   assert_int_equal(r->c->motion, URT_MOTION_IDLE);  // at rest, nothing stopped on the way
@@ -931,7 +913,7 @@ static uint64_t run_short(void) {
   urt_ctrl_cmd_t l = movel(&r, p, 1.0, 0.1, 0.0);
   period(&r, &l);
   run(&r, 0.1);
-  urt_ctrl_cmd_t s = cmd_of(&r, URT_CTRL_SPEEDL);
+  urt_ctrl_cmd_t s = rig_cmd(&r, URT_CTRL_SPEEDL);
   s.pose[0] = 0.01;
   s.a = 0.5;
   period(&r, &s);

@@ -29,14 +29,6 @@ static const double kHoldTime = 0.5;
 static const double kHoldTime = 2.0;
 #endif
 
-static urt_ctrl_cmd_t cmd_of(rig_t *r, int kind) {
-  urt_ctrl_cmd_t c;
-  memset(&c, 0, sizeof c);
-  c.kind = kind;
-  c.id = r->next_id++;
-  return c;
-}
-
 static void q_actual(const rig_t *r, double *q) {
   for (int j = 0; j < URT_NJ; j++) {
     q[j] = r->d->x[j][URT_X_Q];
@@ -93,7 +85,7 @@ static urt_snapshot_t snap(rig_t *r) {
 /* an arm pose away from the home pose's singular wrist, TCP in front of the base */
 static void go_to_work_pose(rig_t *r) {
   const double q[URT_NJ] = {0.0, -1.9, 1.9, -1.57, -1.57, 0.0};
-  urt_ctrl_cmd_t c = cmd_of(r, URT_CTRL_MOVEJ);
+  urt_ctrl_cmd_t c = rig_cmd(r, URT_CTRL_MOVEJ);
   memcpy(c.q, q, sizeof c.q);
   c.a = 3.0;
   c.v = 2.0;
@@ -110,7 +102,7 @@ static void go_to_work_pose(rig_t *r) {
 static void test_pause__movej_slows_holds_and_resumes_to_the_same_target(void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
-  urt_ctrl_cmd_t play = cmd_of(&r, URT_CTRL_PROGRAM_STATE);
+  urt_ctrl_cmd_t play = rig_cmd(&r, URT_CTRL_PROGRAM_STATE);
   play.index = URT_PROGRAM_PLAYING;
   rig_period(&r, &play);
 
@@ -118,7 +110,7 @@ static void test_pause__movej_slows_holds_and_resumes_to_the_same_target(void **
   q_actual(&r, q);
   const double D = 30.0 * M_PI / 180.0;
   q[1] += D;
-  urt_ctrl_cmd_t mj = cmd_of(&r, URT_CTRL_MOVEJ);
+  urt_ctrl_cmd_t mj = rig_cmd(&r, URT_CTRL_MOVEJ);
   memcpy(mj.q, q, sizeof mj.q);
   mj.a = 1.4;
   mj.v = 1.05;
@@ -131,7 +123,7 @@ static void test_pause__movej_slows_holds_and_resumes_to_the_same_target(void **
     rig_period(&r, NULL);
     t += r.c->period;
   }
-  urt_ctrl_cmd_t pause = cmd_of(&r, URT_CTRL_PAUSE);
+  urt_ctrl_cmd_t pause = rig_cmd(&r, URT_CTRL_PAUSE);
   rig_period(&r, &pause);
   t += r.c->period;
   assert_int_equal(snap(&r).program_state, URT_PROGRAM_PAUSED);
@@ -154,7 +146,7 @@ static void test_pause__movej_slows_holds_and_resumes_to_the_same_target(void **
   assert_near(s.speed_scaling, 0.0, 1e-12);
   assert_near(r.c->qd1[1], 0.0, 0.0);
 
-  urt_ctrl_cmd_t resume = cmd_of(&r, URT_CTRL_RESUME);
+  urt_ctrl_cmd_t resume = rig_cmd(&r, URT_CTRL_RESUME);
   rig_period(&r, &resume);
   t += r.c->period;
   assert_int_equal(snap(&r).program_state, URT_PROGRAM_PLAYING);
@@ -179,22 +171,22 @@ static void test_pause__movej_slows_holds_and_resumes_to_the_same_target(void **
 static void test_pause__streaming_stops_and_program_stop_clears_the_pause(void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
-  urt_ctrl_cmd_t play = cmd_of(&r, URT_CTRL_PROGRAM_STATE);
+  urt_ctrl_cmd_t play = rig_cmd(&r, URT_CTRL_PROGRAM_STATE);
   play.index = URT_PROGRAM_PLAYING;
   rig_period(&r, &play);
-  urt_ctrl_cmd_t sj = cmd_of(&r, URT_CTRL_SPEEDJ);
+  urt_ctrl_cmd_t sj = rig_cmd(&r, URT_CTRL_SPEEDJ);
   sj.q[0] = 0.3;
   sj.a = 2.0;
   rig_period(&r, &sj);
   run_for(&r, 0.3);
-  urt_ctrl_cmd_t pause = cmd_of(&r, URT_CTRL_PAUSE);
+  urt_ctrl_cmd_t pause = rig_cmd(&r, URT_CTRL_PAUSE);
   rig_period(&r, &pause);
   assert_int_equal(r.c->motion, URT_MOTION_STOP);
   run_for(&r, 0.3);
   assert_int_equal(r.c->motion, URT_MOTION_IDLE);
   assert_true(r.c->motion_done_id >= sj.id);
   assert_int_equal(snap(&r).program_state, URT_PROGRAM_PAUSED);
-  urt_ctrl_cmd_t stop = cmd_of(&r, URT_CTRL_PROGRAM_STATE);
+  urt_ctrl_cmd_t stop = rig_cmd(&r, URT_CTRL_PROGRAM_STATE);
   stop.index = URT_PROGRAM_STOPPED;
   rig_period(&r, &stop);
   assert_int_equal(r.c->paused, 0);
@@ -208,7 +200,7 @@ static void test_pause__streaming_stops_and_program_stop_clears_the_pause(void *
 static void test_set_wrench__shows_in_tcp_force_and_bad_values_are_refused(void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
-  urt_ctrl_cmd_t w = cmd_of(&r, URT_CTRL_SET_WRENCH);
+  urt_ctrl_cmd_t w = rig_cmd(&r, URT_CTRL_SET_WRENCH);
   const double wr[6] = {15.0, -8.0, 25.0, 1.5, -0.7, 0.4};
   memcpy(w.pose, wr, sizeof wr);
   rig_period(&r, &w);
@@ -222,7 +214,7 @@ static void test_set_wrench__shows_in_tcp_force_and_bad_values_are_refused(void 
   assert_true(err < 1e-2);
   assert_int_equal(r.c->fault, 0);
 
-  urt_ctrl_cmd_t bad = cmd_of(&r, URT_CTRL_SET_WRENCH);
+  urt_ctrl_cmd_t bad = rig_cmd(&r, URT_CTRL_SET_WRENCH);
   bad.pose[2] = NAN;
   rig_period(&r, &bad);
   assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
@@ -232,7 +224,7 @@ static void test_set_wrench__shows_in_tcp_force_and_bad_values_are_refused(void 
   assert_near(r.d->wrench_ext[2], 25.0, 0.0);
 
   // gravity: the controller's model only; bounded like the loader's
-  urt_ctrl_cmd_t g = cmd_of(&r, URT_CTRL_SET_GRAVITY);
+  urt_ctrl_cmd_t g = rig_cmd(&r, URT_CTRL_SET_GRAVITY);
   g.pose[2] = -9.7;
   rig_period(&r, &g);
   assert_near(r.c->gravity[2], -9.7, 0.0);
@@ -247,7 +239,7 @@ static void test_set_tool_voltage__kept_shown_and_bad_values_refused(void **stat
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
   assert_int_equal(snap(&r).tool_voltage, 0);
-  urt_ctrl_cmd_t v = cmd_of(&r, URT_CTRL_SET_TOOL_VOLTAGE);
+  urt_ctrl_cmd_t v = rig_cmd(&r, URT_CTRL_SET_TOOL_VOLTAGE);
   v.value = 24;
   rig_period(&r, &v);
   assert_int_equal(snap(&r).tool_voltage, 24);
@@ -266,7 +258,7 @@ static void test_set_tool_voltage__kept_shown_and_bad_values_refused(void **stat
 static void test_set_inputs__masked_levels_shown_and_bad_commands_refused_whole(void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
-  urt_ctrl_cmd_t in = cmd_of(&r, URT_CTRL_SET_INPUTS);
+  urt_ctrl_cmd_t in = rig_cmd(&r, URT_CTRL_SET_INPUTS);
   in.id = 0;
   in.index = (1 << 0) | (1 << 9) | (1 << 17);
   in.value = (1 << 0) | (1 << 17);
@@ -383,7 +375,7 @@ static void test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it(voi
   assert_int_equal(r.d->pstop, 0);
 
   // above the joint's torque limit: protective stop
-  urt_ctrl_cmd_t bad = cmd_of(&r, URT_CTRL_TORQUE);
+  urt_ctrl_cmd_t bad = rig_cmd(&r, URT_CTRL_TORQUE);
   bad.tau[1] = 1e3;
   rig_period(&r, &bad);
   assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_PROTECTIVE_STOP);
@@ -397,7 +389,7 @@ static void test_freedrive__holds_without_a_wrench_and_gives_way_to_one(void **s
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
-  urt_ctrl_cmd_t fd = cmd_of(&r, URT_CTRL_FREEDRIVE);
+  urt_ctrl_cmd_t fd = rig_cmd(&r, URT_CTRL_FREEDRIVE);
   fd.index = 1;
   for (int j = 0; j < URT_NJ; j++) {
     fd.q[j] = 1.0;
@@ -425,7 +417,7 @@ static void test_freedrive__holds_without_a_wrench_and_gives_way_to_one(void **s
   assert_true(along > 5e-3);
 
   // end: decelerate and hold where it is
-  urt_ctrl_cmd_t end = cmd_of(&r, URT_CTRL_FREEDRIVE);
+  urt_ctrl_cmd_t end = rig_cmd(&r, URT_CTRL_FREEDRIVE);
   end.index = 0;
   rig_period(&r, &end);
   assert_int_equal(r.c->torque_mask, 0);
@@ -444,7 +436,7 @@ static void test_freedrive__held_axes_resist_free_axis_gives_way(void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
-  urt_ctrl_cmd_t fd = cmd_of(&r, URT_CTRL_FREEDRIVE);
+  urt_ctrl_cmd_t fd = rig_cmd(&r, URT_CTRL_FREEDRIVE);
   fd.index = 1;
   fd.q[2] = 1.0;  // only z free, in the base frame (pose zeros)
   double p0[6], p1[6];
@@ -484,11 +476,11 @@ static void test_set_gravity__changes_the_controllers_model_not_the_world(void *
   go_to_work_pose(&r);
   // the controller believes there is no gravity: in freedrive the arm falls (a model off by a
   // little would stick: friction holds up to ~10 N m on the big joints)
-  urt_ctrl_cmd_t g = cmd_of(&r, URT_CTRL_SET_GRAVITY);
+  urt_ctrl_cmd_t g = rig_cmd(&r, URT_CTRL_SET_GRAVITY);
   rig_period(&r, &g);
   double z0[6], z1[6];
   tcp_actual(&r, z0);
-  urt_ctrl_cmd_t fd = cmd_of(&r, URT_CTRL_FREEDRIVE);
+  urt_ctrl_cmd_t fd = rig_cmd(&r, URT_CTRL_FREEDRIVE);
   fd.index = 1;
   for (int j = 0; j < URT_NJ; j++) {
     fd.q[j] = 1.0;
@@ -551,7 +543,7 @@ static void test_servoc__moves_at_tool_speed_v_to_the_pose(void **state) {
   tcp_actual(&r, p0);
   memcpy(goal, p0, sizeof goal);
   goal[1] += 0.15;
-  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SERVOC);
+  urt_ctrl_cmd_t c = rig_cmd(&r, URT_CTRL_SERVOC);
   memcpy(c.pose, goal, sizeof c.pose);
   c.v = 0.1;
   c.a = 1.0;
@@ -588,7 +580,7 @@ static void test_force_mode__complies_along_z_and_holds_the_other_axes(void **st
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
-  urt_ctrl_cmd_t f = cmd_of(&r, URT_CTRL_FORCE_MODE);
+  urt_ctrl_cmd_t f = rig_cmd(&r, URT_CTRL_FORCE_MODE);
   f.id = 0;
   f.index = 2;   // task frame = base frame as given
   f.q[2] = 1.0;  // compliant along z
@@ -607,7 +599,7 @@ static void test_force_mode__complies_along_z_and_holds_the_other_axes(void **st
   tcp_actual(&r, p2);
   const double vz = (p2[2] - p1[2]) / 0.2;
   // the environment pushes back with the commanded force: rest
-  urt_ctrl_cmd_t w = cmd_of(&r, URT_CTRL_SET_WRENCH);
+  urt_ctrl_cmd_t w = rig_cmd(&r, URT_CTRL_SET_WRENCH);
   w.pose[2] = -10.0;
   rig_period(&r, &w);
   run_for(&r, 0.2);
@@ -632,7 +624,7 @@ static void test_force_mode__complies_along_z_and_holds_the_other_axes(void **st
   assert_true(p1[2] < p3[2] - 5e-3);
 
   // a speedl inside force mode moves the non-compliant axes
-  urt_ctrl_cmd_t sl = cmd_of(&r, URT_CTRL_SPEEDL);
+  urt_ctrl_cmd_t sl = rig_cmd(&r, URT_CTRL_SPEEDL);
   sl.pose[0] = 0.05;
   sl.a = 0.5;
   rig_period(&r, &sl);
@@ -642,7 +634,7 @@ static void test_force_mode__complies_along_z_and_holds_the_other_axes(void **st
   assert_true(p2[0] > p1[0] + 0.01);
 
   // end: at rest under position control
-  urt_ctrl_cmd_t end = cmd_of(&r, URT_CTRL_FORCE_MODE_END);
+  urt_ctrl_cmd_t end = rig_cmd(&r, URT_CTRL_FORCE_MODE_END);
   end.id = 0;
   rig_period(&r, &end);
   memset(r.d->wrench_ext, 0, sizeof r.d->wrench_ext);
@@ -660,7 +652,7 @@ static void test_force_mode__type_1_pulls_toward_the_frame_origin(void **state) 
   go_to_work_pose(&r);
   double p0[6], p1[6];
   tcp_actual(&r, p0);
-  urt_ctrl_cmd_t f = cmd_of(&r, URT_CTRL_FORCE_MODE);
+  urt_ctrl_cmd_t f = rig_cmd(&r, URT_CTRL_FORCE_MODE);
   f.id = 0;
   f.index = 1;  // y from the TCP toward the frame's origin
   f.pose[0] = p0[0] + 0.3;
@@ -677,7 +669,7 @@ static void test_force_mode__type_1_pulls_toward_the_frame_origin(void **state) 
                 "mm\n", 1e3 * (p1[0] - p0[0]), 1e3 * (p1[1] - p0[1]), 1e3 * (p1[2] - p0[2]));
   assert_true(p1[0] - p0[0] > 0.015);
   assert_true(fabs(p1[1] - p0[1]) < 1e-3 && fabs(p1[2] - p0[2]) < 1e-3);
-  urt_ctrl_cmd_t end = cmd_of(&r, URT_CTRL_FORCE_MODE_END);
+  urt_ctrl_cmd_t end = rig_cmd(&r, URT_CTRL_FORCE_MODE_END);
   rig_period(&r, &end);
   run_for(&r, 0.2);
   assert_int_equal(r.c->motion, URT_MOTION_IDLE);
@@ -695,39 +687,39 @@ static void test_modes__no_heap_allocation(void **state) {
   tcp_actual(&r, p);
   long before = urt_test_malloc_count();
   urt_test_malloc_arm(1);
-  urt_ctrl_cmd_t t = cmd_of(&r, URT_CTRL_TORQUE);
+  urt_ctrl_cmd_t t = rig_cmd(&r, URT_CTRL_TORQUE);
   urt_arm_gravity(r.m, r.c->q1, t.tau);
   rig_period(&r, &t);
   run_for(&r, 0.02);
-  urt_ctrl_cmd_t fd = cmd_of(&r, URT_CTRL_FREEDRIVE);
+  urt_ctrl_cmd_t fd = rig_cmd(&r, URT_CTRL_FREEDRIVE);
   fd.index = 1;
   fd.q[0] = 1.0;
   rig_period(&r, &fd);
   fd.index = 0;
   rig_period(&r, &fd);
-  urt_ctrl_cmd_t g = cmd_of(&r, URT_CTRL_SET_GRAVITY);
+  urt_ctrl_cmd_t g = rig_cmd(&r, URT_CTRL_SET_GRAVITY);
   g.pose[2] = -9.80;
   rig_period(&r, &g);
-  urt_ctrl_cmd_t sl = cmd_of(&r, URT_CTRL_SERVOL);
+  urt_ctrl_cmd_t sl = rig_cmd(&r, URT_CTRL_SERVOL);
   memcpy(sl.pose, p, sizeof p);
   sl.lookahead_time = 0.1;
   sl.gain = 300.0;
   rig_period(&r, &sl);
-  urt_ctrl_cmd_t sc = cmd_of(&r, URT_CTRL_SERVOC);
+  urt_ctrl_cmd_t sc = rig_cmd(&r, URT_CTRL_SERVOC);
   memcpy(sc.pose, p, sizeof p);
   sc.pose[0] += 0.01;
   sc.a = 1.0;
   sc.v = 0.1;
   rig_period(&r, &sc);
   run_for(&r, 0.02);
-  urt_ctrl_cmd_t f = cmd_of(&r, URT_CTRL_FORCE_MODE);
+  urt_ctrl_cmd_t f = rig_cmd(&r, URT_CTRL_FORCE_MODE);
   f.index = 2;
   f.q[2] = 1.0;
   f.qd[2] = 0.1;
   rig_period(&r, &f);
-  urt_ctrl_cmd_t pa = cmd_of(&r, URT_CTRL_PAUSE);
+  urt_ctrl_cmd_t pa = rig_cmd(&r, URT_CTRL_PAUSE);
   rig_period(&r, &pa);
-  urt_ctrl_cmd_t re = cmd_of(&r, URT_CTRL_RESUME);
+  urt_ctrl_cmd_t re = rig_cmd(&r, URT_CTRL_RESUME);
   rig_period(&r, &re);
   urt_snapshot_t s;
   urt_snapshot_fill(r.m, r.c, r.d, &s);

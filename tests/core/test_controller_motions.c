@@ -14,14 +14,6 @@
 #include "urt/core.h"
 #include "urt/snapshot.h"
 
-static urt_ctrl_cmd_t cmd_of(rig_t *r, int kind) {
-  urt_ctrl_cmd_t c;
-  memset(&c, 0, sizeof c);
-  c.kind = kind;
-  c.id = r->next_id++;
-  return c;
-}
-
 /* periods until the id is done (at most t_max) [s] */
 static double time_to_done(rig_t *r, const urt_ctrl_cmd_t *cmd, double t_max) {
   rig_period(r, cmd);
@@ -44,7 +36,7 @@ static void test_optimovej__fractions_of_the_joint_limits_set_the_time(void **st
   (void)state;
   rig_t r = rig_new(urt_test_quiet, 0.002, 1);
   const double D = 0.5, fa = 0.3, fv = 0.3;
-  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_OPTIMOVEJ);
+  urt_ctrl_cmd_t c = rig_cmd(&r, URT_CTRL_OPTIMOVEJ);
   memcpy(c.q, r.c->q1, sizeof c.q);
   c.q[0] += D;       // the leading joint
   c.q[2] -= 0.25;    // half its share
@@ -76,7 +68,7 @@ static void test_optimovej__fractions_outside_0_1_are_refused(void **state) {
   rig_t r = rig_new(urt_test_quiet, 0.002, 1);
   const double bad[][2] = {{0.0, 0.5}, {1.5, 0.5}, {0.5, 0.0}, {0.5, 1.01}, {NAN, 0.5}};
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-    urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_OPTIMOVEJ);
+    urt_ctrl_cmd_t c = rig_cmd(&r, URT_CTRL_OPTIMOVEJ);
     memcpy(c.q, r.c->q1, sizeof c.q);
     c.q[1] += 0.1;
     c.a = bad[i][0];
@@ -87,7 +79,7 @@ static void test_optimovej__fractions_outside_0_1_are_refused(void **state) {
     assert_int_equal(r.c->motion, URT_MOTION_IDLE);
   }
   // 1.0 is allowed: the full limits
-  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_OPTIMOVEJ);
+  urt_ctrl_cmd_t c = rig_cmd(&r, URT_CTRL_OPTIMOVEJ);
   memcpy(c.q, r.c->q1, sizeof c.q);
   c.q[5] += 0.2;
   c.a = c.v = 1.0;
@@ -116,7 +108,7 @@ static double speedj_stream(const int *late, int n_late, int stamped) {
   for (int n = 1; n <= N + 1; n++) {
     const double u = fmin(1.0, n * T / (N * T));
     const double v = D / (N * T) * (30 * u * u - 60 * u * u * u + 30 * u * u * u * u);
-    urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SPEEDJ);
+    urt_ctrl_cmd_t c = rig_cmd(&r, URT_CTRL_SPEEDJ);
     c.q[1] = v;
     c.a = fmax(fabs(v - v_prev) / T, 1e-9);
     c.t = T;
@@ -287,7 +279,7 @@ static void test_servoj__a_late_jump_is_not_re_run(void **state) {
 static void speedj_then_silence(int stamped, int behind, double *qd, int n) {
   rig_t r = rig_new(urt_test_quiet, 0.002, 1);
   run_for(&r, 0.01);  // (tick 0 is no tick: a stamp of 0 means not a program's)
-  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SPEEDJ);
+  urt_ctrl_cmd_t c = rig_cmd(&r, URT_CTRL_SPEEDJ);
   c.q[1] = 0.3;
   c.a = 6.0;
   c.t = 0.1;
@@ -337,7 +329,7 @@ static void test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them(void **
   for (int j = 0; j < URT_NJ; j++) {
     f = fmin(f, r.m->joint[j].qd_max / fabs(qd[j]));
   }
-  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_SPEEDJ);
+  urt_ctrl_cmd_t c = rig_cmd(&r, URT_CTRL_SPEEDJ);
   memcpy(c.q, qd, sizeof c.q);
   c.a = 40.0;
   c.t = 0.3;
@@ -374,7 +366,7 @@ static void test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them(void **
   int stopped_at = -1;
   for (int k = 1; k < 250 && stopped_at < 0; k++) {
     const double tau = k * r.c->period, v = -6.0 * 3.746 * (tau - tau * tau);
-    urt_ctrl_cmd_t st = cmd_of(&r, URT_CTRL_SPEEDJ);
+    urt_ctrl_cmd_t st = rig_cmd(&r, URT_CTRL_SPEEDJ);
     st.q[2] = v;
     st.a = fmax(fabs(v - prev) / r.c->period, 1e-9);
     st.t = r.c->period;
@@ -389,7 +381,7 @@ static void test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them(void **
   assert_int_equal(stopped_at, -1);
   assert_true(fabs(r.c->qd1[2]) <= r.m->joint[2].qd_max);
   // within the limits nothing is scaled and speed_scaling is the slider's again
-  urt_ctrl_cmd_t slow = cmd_of(&r, URT_CTRL_SPEEDJ);
+  urt_ctrl_cmd_t slow = rig_cmd(&r, URT_CTRL_SPEEDJ);
   slow.q[0] = 0.3;
   slow.a = 40.0;
   slow.t = 0.1;
@@ -413,7 +405,7 @@ static void test_movel__a_t_too_short_for_the_joints_is_slowed_down_to_them(void
   memcpy(p1, p0, sizeof p1);
   p1[0] += 0.3;  // 30 cm in 0.1 s: 4.5 m/s peak on a triangle
   p1[2] -= 0.1;
-  urt_ctrl_cmd_t c = cmd_of(&r, URT_CTRL_MOVEL);
+  urt_ctrl_cmd_t c = rig_cmd(&r, URT_CTRL_MOVEL);
   memcpy(c.pose, p1, sizeof c.pose);
   c.a = 1.4;
   c.v = 1.04;
@@ -427,7 +419,7 @@ static void test_movel__a_t_too_short_for_the_joints_is_slowed_down_to_them(void
   for (int i = 0; i < 3; i++) {
     off = fmax(off, fabs(pe[i] - p1[i]));
   }
-  urt_ctrl_cmd_t back = cmd_of(&r, URT_CTRL_MOVEL);
+  urt_ctrl_cmd_t back = rig_cmd(&r, URT_CTRL_MOVEL);
   memcpy(back.pose, p0, sizeof back.pose);
   back.a = 1.4;
   back.v = 1.04;

@@ -17,16 +17,8 @@
 
 static const double kWork[URT_NJ] = {0.0, -1.9, 1.9, -1.57, -1.57, 0.0};
 
-static urt_ctrl_cmd_t cmd_of(rig_t *r, int kind) {
-  urt_ctrl_cmd_t c;
-  memset(&c, 0, sizeof c);
-  c.kind = kind;
-  c.id = r->next_id++;
-  return c;
-}
-
 static void go_work(rig_t *r) {
-  urt_ctrl_cmd_t c = cmd_of(r, URT_CTRL_MOVEJ);
+  urt_ctrl_cmd_t c = rig_cmd(r, URT_CTRL_MOVEJ);
   memcpy(c.q, kWork, sizeof c.q);
   c.a = 3.0;
   c.v = 2.0;
@@ -121,16 +113,6 @@ static void run_cmd(rig_t *r, const urt_ctrl_cmd_t *cmd, rec_t *k, int wait_idle
   }
 }
 
-static urt_ctrl_cmd_t tool_move(rig_t *r, int kind, const double *pose, double a, double v,
-                                double rad) {
-  urt_ctrl_cmd_t c = cmd_of(r, kind);
-  memcpy(c.pose, pose, sizeof c.pose);
-  c.a = a;
-  c.v = v;
-  c.r = rad;
-  return c;
-}
-
 /* two tool lines at a right angle (x then y) with blend radius rad: the blend is the arc of
  * radius d / tan(45°) = d tangent to both, entering and leaving d from the via point; d is rad
  * shrunk to half a line's length (UR's motion version 2) */
@@ -146,8 +128,8 @@ static void corner(int kind, double len, double rad, double v, double d_expect) 
   via[0] += len;
   memcpy(to, via, sizeof to);
   to[1] += len;
-  urt_ctrl_cmd_t a = tool_move(&r, kind, via, 1.2, v, rad);
-  urt_ctrl_cmd_t b = tool_move(&r, kind, to, 1.2, v, 0.0);
+  urt_ctrl_cmd_t a = rig_tool_move(&r, kind, via, 1.2, v, rad);
+  urt_ctrl_cmd_t b = rig_tool_move(&r, kind, to, 1.2, v, 0.0);
   run_cmd(&r, &a, &k, 0);
   const int n_a = k.n;
   assert_int_equal(r.c->motion, URT_MOTION_PATH);  // done early, still moving
@@ -226,7 +208,7 @@ static void test_blend__movej_passes_within_r_without_stopping(void **state) {
   q2[1] += 0.4;
   urt_ctrl_forward_kinematics_tcp(r.m, r.c->tcp_offset, q1, via);
   urt_ctrl_forward_kinematics_tcp(r.m, r.c->tcp_offset, q2, to);
-  urt_ctrl_cmd_t a = cmd_of(&r, URT_CTRL_MOVEJ), b = cmd_of(&r, URT_CTRL_MOVEJ);
+  urt_ctrl_cmd_t a = rig_cmd(&r, URT_CTRL_MOVEJ), b = rig_cmd(&r, URT_CTRL_MOVEJ);
   memcpy(a.q, q1, sizeof a.q);
   memcpy(b.q, q2, sizeof b.q);
   a.a = b.a = 1.4;
@@ -264,7 +246,7 @@ static void mixed_case(int kind_a, int kind_b, double rad) {
   memcpy(to, via, sizeof to);
   to[1] += 0.15;
   to[2] -= 0.05;
-  urt_ctrl_cmd_t a = cmd_of(&r, kind_a), b = cmd_of(&r, kind_b);
+  urt_ctrl_cmd_t a = rig_cmd(&r, kind_a), b = rig_cmd(&r, kind_b);
   double qv[URT_NJ], qt[URT_NJ];
   assert_int_equal(urt_ctrl_inverse_kinematics_tcp(r.m, r.c->tcp_offset, via, r.c->q1, qv), 0);
   assert_int_equal(urt_ctrl_inverse_kinematics_tcp(r.m, r.c->tcp_offset, to, qv, qt), 0);
@@ -346,13 +328,13 @@ static void test_blend__a_pure_rotation_stops_at_its_target_then_the_next_starts
   tcp_set(&r, p);
   memcpy(rot, p, sizeof rot);
   rot[5] += 0.3;  // about the base z: the TCP does not move
-  urt_ctrl_cmd_t a = tool_move(&r, URT_CTRL_MOVEL, rot, 1.0, 0.5, 0.05);
+  urt_ctrl_cmd_t a = rig_tool_move(&r, URT_CTRL_MOVEL, rot, 1.0, 0.5, 0.05);
   rig_period(&r, &a);
   for (int i = 0; i < 5000 && r.c->motion_done_id < a.id; i++) rig_period(&r, NULL);
   tcp_set(&r, to);
   memcpy(to, rot, 3 * sizeof(double));
   to[0] += 0.1;
-  urt_ctrl_cmd_t b = tool_move(&r, URT_CTRL_MOVEL, to, 1.2, 0.25, 0.0);
+  urt_ctrl_cmd_t b = rig_tool_move(&r, URT_CTRL_MOVEL, to, 1.2, 0.25, 0.0);
   rig_period(&r, &b);
   // until the arm rests at a's target; b is queued meanwhile
   int rested = 0;
@@ -386,14 +368,14 @@ static void test_blend__halt_ends_the_move_and_the_queued_one(void **state) {
   via[0] += 0.2;
   memcpy(to, via, sizeof to);
   to[1] += 0.2;
-  urt_ctrl_cmd_t a = tool_move(&r, URT_CTRL_MOVEL, via, 1.2, 0.25, 0.05);
-  urt_ctrl_cmd_t b = tool_move(&r, URT_CTRL_MOVEL, to, 1.2, 0.25, 0.0);
+  urt_ctrl_cmd_t a = rig_tool_move(&r, URT_CTRL_MOVEL, via, 1.2, 0.25, 0.05);
+  urt_ctrl_cmd_t b = rig_tool_move(&r, URT_CTRL_MOVEL, to, 1.2, 0.25, 0.0);
   rig_period(&r, &a);
   run_for(&r, 0.1);
   rig_period(&r, &b);  // early: queued behind a
   assert_true(r.c->motion_done_id < b.id);
   assert_int_equal(r.c->has_pending, 1);
-  urt_ctrl_cmd_t h = cmd_of(&r, URT_CTRL_HALT);
+  urt_ctrl_cmd_t h = rig_cmd(&r, URT_CTRL_HALT);
   rig_period(&r, &h);
   assert_true(r.c->motion_done_id >= b.id);
   run_for(&r, 0.5);
@@ -412,7 +394,7 @@ static void test_blend__the_last_move_stops_at_its_target(void **state) {
   double p[6], end[6];
   tcp_set(&r, p);
   p[2] += 0.1;
-  urt_ctrl_cmd_t a = tool_move(&r, URT_CTRL_MOVEL, p, 1.2, 0.25, 0.05);
+  urt_ctrl_cmd_t a = rig_tool_move(&r, URT_CTRL_MOVEL, p, 1.2, 0.25, 0.05);
   run_cmd(&r, &a, &k, 1);
   tcp_set(&r, end);
   print_message("movel r 0.05 alone: stops %.2e m from its target\n", dist3(end, p));
@@ -435,7 +417,7 @@ static void movec_case(int mode) {
   double p[6];
   tcp_set(&r, p);
   const double rho = 0.08, c[3] = {p[0] - rho, p[1], p[2]};
-  urt_ctrl_cmd_t m = cmd_of(&r, URT_CTRL_MOVEC);
+  urt_ctrl_cmd_t m = rig_cmd(&r, URT_CTRL_MOVEC);
   m.q[0] = c[0] + rho * cos(M_PI / 3);
   m.q[1] = c[1] + rho * sin(M_PI / 3);
   m.q[2] = c[2];
@@ -497,7 +479,7 @@ static void test_movec__three_points_on_a_line_are_refused(void **state) {
   go_work(&r);
   double p[6];
   tcp_set(&r, p);
-  urt_ctrl_cmd_t m = cmd_of(&r, URT_CTRL_MOVEC);
+  urt_ctrl_cmd_t m = rig_cmd(&r, URT_CTRL_MOVEC);
   memcpy(m.pose, p, sizeof m.pose);
   m.pose[0] += 0.1;
   m.q[0] = p[0] + 0.05;
@@ -523,7 +505,7 @@ static void test_optimovel__fractions_of_what_the_joints_allow(void **state) {
   p[0] += 0.25;
   p[2] -= 0.1;
   const double fv = 0.2;
-  urt_ctrl_cmd_t o = tool_move(&r, URT_CTRL_OPTIMOVEL, p, 0.5, fv, 0.0);
+  urt_ctrl_cmd_t o = rig_tool_move(&r, URT_CTRL_OPTIMOVEL, p, 0.5, fv, 0.0);
   rig_period(&r, &o);
   double peak = 0.0;
   for (int i = 0; i < 10000 && r.c->motion_done_id < o.id; i++) {
@@ -539,7 +521,7 @@ static void test_optimovel__fractions_of_what_the_joints_allow(void **state) {
   assert_true(dist3(end, p) < 1e-8);
   const double bad[][2] = {{0.0, 0.5}, {1.5, 0.5}, {0.5, 0.0}, {0.5, 1.01}, {NAN, 0.5}};
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-    urt_ctrl_cmd_t b = tool_move(&r, URT_CTRL_OPTIMOVEL, p, bad[i][0], bad[i][1], 0.0);
+    urt_ctrl_cmd_t b = rig_tool_move(&r, URT_CTRL_OPTIMOVEL, p, bad[i][0], bad[i][1], 0.0);
     rig_period(&r, &b);
     assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
     assert_true(r.c->motion_done_id >= b.id);

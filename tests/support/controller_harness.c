@@ -4,6 +4,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "test_model.h"
 #include "test_support.h"
@@ -53,4 +54,22 @@ void tcp_actual(const rig_t *r, double pose[6]) {
     q[j] = r->d->x[j][URT_X_Q];
   }
   urt_ctrl_forward_kinematics_tcp(r->m, r->c->tcp_offset, q, pose);
+}
+
+urt_ctrl_cmd_t rig_cmd(rig_t *r, int kind) {
+  urt_ctrl_cmd_t c;
+  memset(&c, 0, sizeof c);
+  c.kind = kind;
+  c.id = r->next_id++;
+  return c;
+}
+
+urt_ctrl_cmd_t rig_tool_move(rig_t *r, int kind, const double pose[6], double a, double v,
+                             double rad) {
+  urt_ctrl_cmd_t c = rig_cmd(r, kind);
+  memcpy(c.pose, pose, sizeof c.pose);
+  c.a = a;
+  c.v = v;
+  c.r = rad;
+  return c;
 }

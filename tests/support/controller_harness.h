@@ -31,4 +31,12 @@ void run_for(rig_t *r, double t);
 /* The TCP pose of the actual joint angles (x y z rx ry rz, controller's TCP offset). */
 void tcp_actual(const rig_t *r, double pose[6]);
 
+/* A command of this kind with the rig's next motion id, every other field 0. */
+urt_ctrl_cmd_t rig_cmd(rig_t *r, int kind);
+
+/* A tool-space motion (movel, movep, optimovel, …) to pose with acceleration a, speed v and
+ * blend radius rad. */
+urt_ctrl_cmd_t rig_tool_move(rig_t *r, int kind, const double pose[6], double a, double v,
+                             double rad);
+
 #endif
