@@ -117,10 +117,10 @@ void usage(FILE *f) {
       "                         print per joint RMS(measured current), RMS(twin - measured),\n"
       "                         RMS(target_current - measured), their ratios and\n"
       "                         correlations. --out writes the twin beside the recording.\n"
-      "                         Sensor noise is off unless --noise.\n"
+      "                         Sensor noise and quantisation are off unless --noise.\n"
       "      --summary-json OUT with --replay: the table as JSON\n"
       "      --plot DIR         with --replay: per-joint PNGs (tools/plot_replay.py)\n"
-      "      --noise            with --replay: keep the sensor noise\n"
+      "      --noise            with --replay: keep the sensor noise and quantisation\n"
       "  -h, --help             this text\n"
       "CSV columns: t, per joint j = 1..6: q_set_j q_j qd_j qm_j qdm_j i_j i_meas_j v_j tcs_j\n"
       "tf_j, then tcp_x tcp_y tcp_z tcp_rx tcp_ry tcp_rz (SI units, %.17g).\n"
@@ -810,10 +810,17 @@ int main(int argc, char **argv) {
   }
 
   // load the model; --rate goes last so that it wins over a --set of the same key; a replay
-  // runs without sensor noise unless asked (first, so that a --set can still turn it on)
+  // runs without sensor noise and without the encoders' quantisation unless asked (first, so
+  // that a --set can still turn them on). A replay predicts the current; the quantisers are
+  // part of the sensor noise: the joint encoder's count (2.4e-5 rad) through the position
+  // loop (p_pos·p_vel = 7500 A/rad on the shoulder) is a ±0.1 A ripple in the twin's current,
+  // uncorrelated with the real robot's own noise. Replaying urtwin's own noise-free excitation
+  // recording, the wrists' RMS error is 0.085–0.11 A with the quantisers and 0.017 A without.
   std::vector<std::string> sets;
-  if (!o.replay.empty() && !o.noise) {
+  const size_t n_quiet = !o.replay.empty() && !o.noise ? 2 : 0;
+  if (n_quiet) {
     sets.emplace_back("sensors.noise=false");
+    sets.emplace_back("sensors.quantise=false");
   }
   sets.insert(sets.end(), o.sets.begin(), o.sets.end());
   if (o.rate > 0.0) {
@@ -861,13 +868,13 @@ int main(int argc, char **argv) {
     if (!raised.empty()) {
       urt_model_free(m);
       m = nullptr;
-      std::vector<std::string> sets2(sets.begin(), sets.begin() + (o.noise ? 0 : 1));
+      std::vector<std::string> sets2(sets.begin(), sets.begin() + (long)n_quiet);
       for (const std::string &r : raised) {
         std::fprintf(stderr, "urt_sim: note: the recording exceeds a command limit: --set %s\n",
                      r.c_str());
         sets2.push_back(r);
       }
-      sets2.insert(sets2.end(), sets.begin() + (o.noise ? 0 : 1), sets.end());
+      sets2.insert(sets2.end(), sets.begin() + (long)n_quiet, sets.end());
       std::vector<const char *> ov2;
       for (const std::string &s : sets2) {
         ov2.push_back(s.c_str());
