@@ -231,3 +231,44 @@ def test_identify__recovers_a_known_motor_torque_constant(tmp_path):
     kt = value(ov, "joints.1.motor.kt", kt_paper)
     assert kt_true <= kt <= 0.995 * kt_paper, (kt, kt_true)
     assert ov["set"]["joints.1.motor.kt"]["unit"] == "N m/A"
+
+
+def test_identify__hold_settle_fits_a_moving_joints_settled_holds_not_its_stops():
+    # A joint that moves, then stands (--hold-settle 1): the first HOLD_SETTLE s of its hold carry the friction
+    # the real drive relaxes (not the surrogate's law), the rest is the holding level and is
+    # fitted; a joint that never moves keeps every sample; slow samples of a move are left out
+    import urt_identify
+    t = np.round(np.arange(0.0, 4.0, 0.008), 6)
+    q = np.zeros((len(t), 6))
+    qd = np.zeros((len(t), 6))
+    move = t < 1.0
+    qd[move, 1] = np.sin(np.pi * t[move]) * 0.5       # 0 at t = 0, slow near both ends
+    q[:, 1] = np.cumsum(qd[:, 1]) * 0.008
+    rec = urt_recording.Recording(Path("hold.csv"), t, {
+        "target_q": q, "target_qd": qd, "target_qdd": np.zeros_like(q),
+        "actual_current": np.zeros_like(q)})
+
+    class NoArm:
+        def regressor(self, q, qd, qdd):
+            return np.zeros((len(q), 6, 60))
+
+    assert urt_identify.HOLD_SETTLE == 0.0  # off by default: every hold sample left out
+    fd = urt_identify.FitData(rec, NoArm())
+    assert np.all(fd.weight[t >= 1.0, 1] == 0.0)
+    urt_identify.HOLD_SETTLE = 1.0  # --hold-settle 1
+    try:
+        fd = urt_identify.FitData(rec, NoArm())
+    finally:
+        urt_identify.HOLD_SETTLE = 0.0
+    assert fd.moving[1] and not fd.moving[0]
+    w = fd.weight
+    assert np.all(w[:, 0] == 1.0)                     # never moves: every sample
+    stop = t >= 1.0
+    assert np.all(w[stop & (t < 1.99), 1] == 0.0)     # the stop's first second: not fitted
+    assert np.all(w[t >= 2.0, 1] == 1.0)              # the settled hold: fitted
+    slow = move & (np.abs(qd[:, 1]) < urt_identify.V_MIN)
+    assert slow.any() and np.all(w[slow & (t > 0.5), 1] == 0.0)  # slow end of the move
+    assert np.all(w[move & (np.abs(qd[:, 1]) >= urt_identify.V_MIN), 1] == 1.0)
+    # the recording starting at rest counts its hold from its first sample
+    m = urt_identify.settled_holds(t, qd, 1.0)
+    assert not m[0, 1] and m[:, 0].sum() == np.sum(t >= 1.0)
