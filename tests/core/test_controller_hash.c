@@ -204,12 +204,16 @@ static urt_ctrl_cmd_t movej(rig_t *r, const double *q, double a, double v, doubl
 }
 
 static urt_ctrl_cmd_t movel(rig_t *r, const double *pose, double a, double v, double t) {
-  urt_ctrl_cmd_t c = rig_cmd(r, URT_CTRL_MOVEL);
-  memcpy(c.pose, pose, sizeof c.pose);
-  c.a = a;
-  c.v = v;
+  urt_ctrl_cmd_t c = rig_tool_move(r, URT_CTRL_MOVEL, pose, a, v, 0.0);
   c.t = t;
   return c;
+}
+
+/* the program paused for `held` seconds, then resumed */
+static void pause_for(rig_t *r, double held) {
+  send(r, URT_CTRL_PAUSE);
+  run(r, held);
+  send(r, URT_CTRL_RESUME);
 }
 
 static void slider(rig_t *r, double v) {
@@ -700,9 +704,7 @@ static void sc_pause(rig_t *r) {
   urt_ctrl_cmd_t a = movej(r, q, 1.4, 1.05, 0.0);
   period(r, &a);
   run(r, 0.3);
-  send(r, URT_CTRL_PAUSE);
-  run(r, 0.5);
-  send(r, URT_CTRL_RESUME);
+  pause_for(r, 0.5);
   run_until_done(r, a.id, 5.0, 0.1);
   double p[6];
   pose_now(r, p);
@@ -710,9 +712,7 @@ static void sc_pause(rig_t *r) {
   urt_ctrl_cmd_t l = movel(r, p, 1.2, 0.25, 0.0);
   period(r, &l);
   run(r, 0.15);
-  send(r, URT_CTRL_PAUSE);
-  run(r, 0.4);
-  send(r, URT_CTRL_RESUME);
+  pause_for(r, 0.4);
   run(r, 0.1);
   slider(r, 0.6);
   run_until_done(r, l.id, 5.0, 0.1);
@@ -722,9 +722,7 @@ static void sc_pause(rig_t *r) {
   sj.a = 2.0;
   period(r, &sj);
   run(r, 0.3);
-  send(r, URT_CTRL_PAUSE);
-  run(r, 0.3);
-  send(r, URT_CTRL_RESUME);
+  pause_for(r, 0.3);
   q[0] -= 0.3;
   urt_ctrl_cmd_t b = movej(r, q, 1.4, 1.05, 0.0);  // paused, then the program stops
   period(r, &b);
@@ -741,9 +739,7 @@ static void sc_pause(rig_t *r) {
   run(r, 0.2);
   urt_ctrl_cmd_t e = movej(r, q, 1.4, 1.05, 0.0);
   period(r, &e);
-  send(r, URT_CTRL_PAUSE);
-  run(r, 0.3);
-  send(r, URT_CTRL_RESUME);
+  pause_for(r, 0.3);
   run_until_done(r, e.id, 5.0, 0.1);
 }
 
@@ -815,9 +811,7 @@ static void sc_path(rig_t *r) {
   m.index = 1;  // the orientation fixed to the tangent
   period(r, &m);
   run(r, 0.3);
-  send(r, URT_CTRL_PAUSE);
-  run(r, 0.4);
-  send(r, URT_CTRL_RESUME);
+  pause_for(r, 0.4);
   run_until_done(r, m.id, 5.0, 0.1);
   // optimovej (fractions of the joints' limits) blended into an optimovel
   urt_ctrl_cmd_t oj = rig_cmd(r, URT_CTRL_OPTIMOVEJ);
