@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import built
+from sim_recording import to_record_layout
 
 ROOT = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("URT_BUILD", ROOT / "build"))
@@ -113,24 +114,12 @@ def test_replay__twin_against_its_own_trace_has_no_error(tmp_path):
 
 
 def excitation_recording(tmp_path, sets=()):
-    """urtwin's own 10 s excitation run (noise and quantisation off) in the record.py layout at
-    125 Hz: its measured current as actual_current, the set-point's q̇, q̈ by central
-    differences on the 1 kHz grid (the excitation is a smooth Fourier series)."""
+    """urtwin's own 10 s excitation run (noise and quantisation off) in the record.py layout."""
     sim_csv = tmp_path / "exc.csv"
     quiet = ["sensors.noise=false", "sensors.quantise=false", *sets]
     sim("--quiet", "--traj", "excitation", "--rate", "10000", "--decimate", "10", "--out",
         sim_csv, *[a for s in quiet for a in ("--set", s)])
-    header = sim_csv.read_text().split("\n", 1)[0].split(",")
-    d = np.loadtxt(sim_csv, delimiter=",", skiprows=1)
-    t = d[:, 0]
-    col = lambda n: np.stack([d[:, header.index(f"{n}_{j + 1}")] for j in range(NJ)], axis=1)
-    q = col("q_set")
-    qd = np.gradient(q, t[1] - t[0], axis=0, edge_order=2)
-    qdd = np.gradient(qd, t[1] - t[0], axis=0, edge_order=2)
-    s = slice(0, None, 8)
-    return write_recording(tmp_path / "exc_rec.csv", t[s],
-                           {"target_q": q[s], "target_qd": qd[s], "target_qdd": qdd[s],
-                            "actual_current": col("i_meas")[s]})
+    return to_record_layout(sim_csv, tmp_path / "exc_rec.csv")
 
 
 def test_replay__runs_without_the_encoders_quantisation_unless_noise(tmp_path):
