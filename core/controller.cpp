@@ -161,6 +161,13 @@ void hold_at(urt_ctrl_t* c, const Vec6& q) noexcept {
 void protective_stop(urt_ctrl_t* c, urt_data_t* d, uint32_t fault, uint32_t pstop_bits) noexcept {
   c->fault |= fault;
   c->safety_mode = URT_SAFETY_MODE_PROTECTIVE_STOP;
+  // a stop met while running (the path left the workspace, the physics stopped, the program's
+  // own protective_stop()) pauses the program, as on a UR: it stays paused after the unlock
+  // until `play` resumes it or a stop ends it (external_control.md, "Pause"). A target outside
+  // the joint limits is a runtime error that ends the program instead (the VM reports it).
+  if (c->program_state == URT_PROGRAM_PLAYING && !(fault & URT_CTRL_FAULT_BAD_TARGET)) {
+    c->paused = 1;
+  }
   finish_motion(c);  // and out of torque and force mode
   if (pstop_bits) {
     d->pstop |= pstop_bits;

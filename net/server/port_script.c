@@ -92,14 +92,25 @@ void urt__script_broadcast_text(urt_emulator_t *e, const char *text) {
  * 204 is UR's "Invalid setpoints" family (a UR3 on 3.3 reported "C204A3: Protective Stop:
  * Invalid setpoints: Sudden stop" for a trajectory beyond its limits, ur_modern_driver issue
  * 13); the argument 0, the words after the family's and the level are urtwin's, unconfirmed.
- * Stops with other causes (limits, the physics) get the SAFETY_MODE message only: urtwin does
- * not model UR's error codes for them. Code, argument and report data of SAFETY_MODE are 0:
+ * A stop the controller meets while running a motion (the path leaves the workspace, the
+ * physics stops the arm: collision, torque, speed) gets ERROR_CODE C153A0 at WARNING level.
+ * UR: "A Protective Stop is a stop initiated by the robot controller due to the robot state's
+ * proximity to a limit. The error codes following this messages, in most situations, can be
+ * the C153 or C157" (docs.universal-robots.com, "Stop recovery"), and a UR3 on 3.3 reported
+ * "C153A2: Protective stop : position deviates from path : Elbow" (python-urx issue 30). The
+ * argument 0 and the words are urtwin's; the level is UR's for protective stops (a warning,
+ * the service note). URCL's sendScriptBlocking fails on it, as URCL's
+ * test_send_script_blocking_fail_on_robot_errors expects for a movel out of the workspace.
+ * Stops with other causes (targets outside the joint limits, refused before they run) get the
+ * SAFETY_MODE message only: urtwin does not model UR's error codes for them. Code, argument and report data of SAFETY_MODE are 0:
  * their values on a real controller are not documented. Called before the tick's robot state,
  * so that on unlock the NORMAL message precedes the state that clears the flag; and a change
  * sends that state in the same tick (urt__script_stream_tick), not at the next 10 Hz one:
  * URCL's test_read_safety_mode sees PROTECTIVE_STOP in the message, then asks for an unlock
  * and waits 1 ms for RobotModeData's flag to clear, which it expects to time out; with the
  * state 100 ms behind, the flag it read was still the old, clear one. */
+#define C153_TEXT "Protective Stop: the motion was stopped at a limit of the robot"
+
 bool urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
   int32_t mode = s->safety_mode;
   int32_t was = e->last_safety_mode;
@@ -133,6 +144,17 @@ bool urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
     n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 209, 0,
                                       URT_PRIMARY_REPORT_WARNING, 0, 0,
                                       "A protective stop was triggered", buf, sizeof buf);
+    if (n > 0) {
+      urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
+    }
+  }
+  if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP &&
+      (s->ctrl_fault & (URT_CTRL_FAULT_IK | URT_CTRL_FAULT_PSTOP)) &&
+      !(s->ctrl_fault & (URT_CTRL_FAULT_SCRIPT_PSTOP | URT_CTRL_FAULT_JUMP | URT_CTRL_FAULT_BAD_TARGET))) {
+    urt_ctrl_log_add(&e->log, s->time, "WARN", "C153A0: " C153_TEXT);
+    n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 153, 0,
+                                      URT_PRIMARY_REPORT_WARNING, 0, 0, C153_TEXT, buf,
+                                      sizeof buf);
     if (n > 0) {
       urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
     }

@@ -88,7 +88,34 @@ bool urt__us_motion_refused(const urt_snapshot_t *s, const char *what, const cha
   return false;
 }
 
+/* A protective stop met while running pauses the program (core/controller.cpp
+ * protective_stop): the thread waits, with no runtime error, until the stop is unlocked and
+ * the program resumed (dashboard `play`), or until the program is stopped (the scheduler
+ * cancels the wait). URCL's test_send_script_blocking_fail_on_robot_errors relies on it: a
+ * movel out of the workspace gives the stop's error code and no runtime exception, and after
+ * the unlock the next program replaces the paused one. A stop that ends the program (a target
+ * outside the joint limits) leaves it playing, and the motion's refusal is a runtime error. */
+static bool paused_by_stop(const urt_snapshot_t *s) {
+  return s->program_state == URT_PROGRAM_PAUSED && !urt__us_safety_ok(s);
+}
+
+static int wait_resumed(vm *V, const us_node *at) {
+  while (V->snap.program_state == URT_PROGRAM_PAUSED || !urt__us_safety_ok(&V->snap) ||
+         V->snap.robot_mode != URT_ROBOT_MODE_RUNNING) {
+    if (urt__us_wait_tick(V, at) != X_OK) {
+      return X_ERR;
+    }
+    urt__us_snap(V);
+  }
+  return X_OK;
+}
+
+/* X_OK when the controller runs the motion, or after a pause for a protective stop (the
+ * streaming commands go on with their next call) */
 static int motion_check(vm *V, const us_node *at, const char *what) {
+  if (paused_by_stop(&V->snap)) {
+    return wait_resumed(V, at);
+  }
   char text[sizeof V->err->text];
   if (urt__us_motion_refused(&V->snap, what, "unknown", text, sizeof text)) {
     return urt__us_fail(V, at, "%s", text);
@@ -101,26 +128,39 @@ int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *c
   if (V->prog->secondary) {
     return urt__us_fail(V, at, "%s is not allowed in a secondary program", what);
   }
-  cmd->id = ++*V->h->motion_id;
-  if (urt__us_submit(V, at, cmd) != X_OK) {
+  // a thread of a program paused by a protective stop issues its next motion once resumed
+  if (paused_by_stop(urt__us_snap(V)) && wait_resumed(V, at) != X_OK) {
     return X_ERR;
   }
-  if (!wait) {
-    return X_OK;
-  }
   for (;;) {
-    urt__us_snap(V);
-    if (V->snap.motion_done_id >= cmd->id) {
-      break;
+    cmd->id = ++*V->h->motion_id;
+    if (urt__us_submit(V, at, cmd) != X_OK) {
+      return X_ERR;
     }
-    if (!urt__us_safety_ok(&V->snap) || V->snap.robot_mode != URT_ROBOT_MODE_RUNNING) {
-      break;  // refused or aborted: reported below
+    if (!wait) {
+      return X_OK;
     }
-    if (urt__us_wait_tick(V, at) != X_OK) {
+    for (;;) {
+      urt__us_snap(V);
+      if (V->snap.motion_done_id >= cmd->id) {
+        break;
+      }
+      if (!urt__us_safety_ok(&V->snap) || V->snap.robot_mode != URT_ROBOT_MODE_RUNNING) {
+        break;  // refused or aborted: reported below
+      }
+      if (urt__us_wait_tick(V, at) != X_OK) {
+        return X_ERR;
+      }
+    }
+    if (!paused_by_stop(&V->snap)) {
+      return motion_check(V, at, what);
+    }
+    // stopped on the way: once resumed the motion runs again from where the arm is, as a UR
+    // program resumes the move it was paused in
+    if (wait_resumed(V, at) != X_OK) {
       return X_ERR;
     }
   }
-  return motion_check(V, at, what);
 }
 
 /* block for t seconds of controller time: ceil(t / period) ticks counted from this one (a

@@ -22,6 +22,10 @@ typedef struct fake_host {
   uint64_t motion_end;      /* tick at which the active motion finishes        */
   uint64_t pending_id;      /* id of the active motion                         */
   bool refuse_motion;       /* answer every motion with a protective stop      */
+  int pause_stops;          /* the next this many motions meet a protective stop that pauses
+                               a playing program, as the controller's (controller.cpp)     */
+  uint64_t unlock_at;       /* nonzero: the protective stop is unlocked at this tick      */
+  uint64_t resume_at;       /* nonzero: a paused program resumes (`play`) at this tick     */
   int full_for;             /* refuse this many submits (ring full)            */
   int tick_sleep_us;        /* real time per tick (0: as fast as asked)        */
   unsigned jump_seed;       /* nonzero: each wait_tick advances 1–4 ticks (a late runner) */
@@ -53,13 +57,21 @@ static inline bool fake_submit(void *ctx, const urt_ctrl_cmd_t *c) {
     f->cmd[f->n_cmd++] = *c;
   }
   if (is_motion(c->kind)) {
-    if (f->refuse_motion) {
+    if (f->pause_stops > 0) {
+      f->pause_stops--;
+      f->s.safety_mode = URT_SAFETY_MODE_PROTECTIVE_STOP;
+      f->s.ctrl_fault = URT_CTRL_FAULT_IK;
+      if (f->s.program_state == URT_PROGRAM_PLAYING) f->s.program_state = URT_PROGRAM_PAUSED;
+      f->s.motion_done_id = c->id;
+    } else if (f->refuse_motion) {
       f->s.safety_mode = URT_SAFETY_MODE_PROTECTIVE_STOP;
       f->s.ctrl_fault = URT_CTRL_FAULT_PSTOP;
       f->s.motion_done_id = c->id;
     } else if (f->motion_ticks == 0) {
+      f->s.ctrl_fault = 0;  // accepted: the last refusal is over, as the controller's
       f->s.motion_done_id = c->id;
     } else {
+      f->s.ctrl_fault = 0;
       f->pending_id = c->id;
       f->motion_end = f->s.tick + (uint64_t)f->motion_ticks;
     }
@@ -92,6 +104,13 @@ static inline uint64_t fake_wait_tick(void *ctx, uint64_t after, int timeout_ms)
     f->s.tick++;
     f->s.time = (double)f->s.tick * f->s.period;
     if (f->running_from && f->s.tick >= f->running_from) f->s.robot_mode = URT_ROBOT_MODE_RUNNING;
+    if (f->unlock_at && f->s.tick >= f->unlock_at &&
+        f->s.safety_mode == URT_SAFETY_MODE_PROTECTIVE_STOP) {
+      f->s.safety_mode = URT_SAFETY_MODE_NORMAL;  // the program stays paused
+    }
+    if (f->resume_at && f->s.tick >= f->resume_at && f->s.program_state == URT_PROGRAM_PAUSED) {
+      f->s.program_state = URT_PROGRAM_PLAYING;
+    }
     if (f->ramp) {  // readings that differ every tick
       f->s.q_target[0] = 0.001 * (double)f->s.tick;
       f->s.tcp_force[2] = -(double)f->s.tick;

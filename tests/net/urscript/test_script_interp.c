@@ -360,6 +360,32 @@ static void test_interp__refused_motion_stops_the_program(void **state) {
   assert_int_equal(R.f.n_msg, 0);
 }
 
+static void test_interp__protective_stop_pauses_and_play_runs_the_motion_again(void **state) {
+  // a movel out of the workspace: the stop pauses the program (no runtime error); the unlock
+  // at tick 50 leaves it paused; `play` at tick 80 resumes it, and the movel runs again
+  R.f.s.program_state = URT_PROGRAM_PLAYING;
+  R.f.pause_stops = 1;
+  R.f.unlock_at = 50;
+  R.f.resume_at = 80;
+  must_run("movel(p[10, 0, 0, 0, 0, 0])\ntextmsg(\"after\")\n");
+  assert_int_equal(R.f.n_cmd, 2);
+  assert_int_equal(R.f.cmd[0].kind, URT_CTRL_MOVEL);
+  assert_int_equal(R.f.cmd[1].kind, URT_CTRL_MOVEL);
+  assert_int_equal(R.f.cmd_vm_tick[1], 80);  // not at the unlock: at the resume
+  assert_true(R.f.cmd[1].id > R.f.cmd[0].id);
+  assert_near(R.f.cmd[1].pose[0], 10, 0);
+  assert_int_equal(R.f.n_msg, 1);
+  assert_string_equal(R.f.msg[0].text, "after");
+}
+
+static void test_interp__a_stop_that_does_not_pause_is_a_runtime_error(void **state) {
+  // the same stop with the program not playing (nothing paused it): the refusal ends it
+  R.f.pause_stops = 1;
+  R.f.unlock_at = 50;
+  assert_int_equal(run_text("movel(p[10, 0, 0, 0, 0, 0])\n", 0), -1);
+  assert_non_null(strstr(R.err.text, "movel: motion refused or aborted (no inverse kinematics"));
+}
+
 static void test_interp__motion_while_powered_off_is_refused(void **state) {
   R.f.s.robot_mode = URT_ROBOT_MODE_POWER_OFF;
   R.f.motion_ticks = 1000000;  // the fake would never finish it: the runner must not hang
@@ -428,6 +454,8 @@ int main(void) {
       cmocka_unit_test_setup(test_interp__loop_that_never_yields_is_too_much_behind, setup),
       cmocka_unit_test_setup(test_interp__loop_with_sync_runs_until_stopped, setup),
       cmocka_unit_test_setup(test_interp__refused_motion_stops_the_program, setup),
+      cmocka_unit_test_setup(test_interp__protective_stop_pauses_and_play_runs_the_motion_again, setup),
+      cmocka_unit_test_setup(test_interp__a_stop_that_does_not_pause_is_a_runtime_error, setup),
       cmocka_unit_test_setup(test_interp__motion_while_powered_off_is_refused, setup),
       cmocka_unit_test_setup(test_interp__runtime_errors_carry_line_and_column, setup),
       cmocka_unit_test_setup(test_interp__full_command_ring_is_retried_on_later_ticks, setup),
