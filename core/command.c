@@ -37,7 +37,7 @@ static uint32_t command_faults(const urt_model_t *m, const urt_command_t *c) {
 void urt__command_hold(urt_data_t *d) {
   memset(&d->cmd, 0, sizeof d->cmd);
   for (int j = 0; j < URT_NJ; j++) {
-    d->cmd.q[j] = d->x[j][URT_X_Q];
+    d->cmd.q[j] = urt__measured_q(d, j);
   }
 }
 

@@ -376,7 +376,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
     case URT_CTRL_POWER_OFF:
       finish_motion(c);
       c->robot_mode = URT_ROBOT_MODE_POWER_OFF;
-      hold_at(c, actual_q(d));
+      hold_at(c, measured_q(d));
       break;
     case URT_CTRL_BRAKE_RELEASE:
       if (c->robot_mode == URT_ROBOT_MODE_IDLE || c->robot_mode == URT_ROBOT_MODE_POWER_OFF) {
@@ -387,7 +387,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       if (c->safety_mode == URT_SAFETY_MODE_PROTECTIVE_STOP || d->pstop) {
         urt_pstop_reset(m, d);
         c->safety_mode = URT_SAFETY_MODE_NORMAL;
-        hold_at(c, actual_q(d));
+        hold_at(c, measured_q(d));
         model_torque(m, c, d->live.payload, c->q1, c->qd1, c->qdd1, c->tau_model1);
         std::memcpy(c->tau_model0, c->tau_model1, sizeof c->tau_model0);
       }

@@ -11,6 +11,7 @@
 #include "arm.hpp"
 #include "urt/controller.h"
 #include "urt/core.h"
+#include "step_internal.h"
 
 namespace urt::core {
 
@@ -89,6 +90,15 @@ inline Vec6 actual_q(const urt_data_t* d) noexcept {
   Vec6 q;
   for (int j = 0; j < URT_NJ; j++) {
     q[j] = d->x[j][URT_X_Q];
+  }
+  return q;
+}
+
+// the joint encoders' reading, where a hold puts the set-point (urt__measured_q)
+inline Vec6 measured_q(const urt_data_t* d) noexcept {
+  Vec6 q;
+  for (int j = 0; j < URT_NJ; j++) {
+    q[j] = urt__measured_q(d, j);
   }
   return q;
 }

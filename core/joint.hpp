@@ -50,6 +50,16 @@ struct JointAux {
   urt_friction_out_t fr;  // friction torque, bristle rate and partials (joint_rates only)
 };
 
+// The joint encoder's reading: its filter's output p plus the held error eps_q, through a
+// sensor fault when the joint has one (a stuck value, a bias, noise). Context: RT.
+inline double joint_q_reading(double p, double eps_q, const urt_fault_joint_t* fj) noexcept {
+  double q_fb = p + eps_q;
+  if (fj) {
+    q_fb = fj->q_stuck ? fj->q_hold : q_fb + fj->q_bias + fj->q_noise;
+  }
+  return q_fb;
+}
+
 // Rates of the 18 drive-block states (rows 0..17 of f). With forced = kNatural the saturations
 // follow the state; otherwise they are forced to `forced` (the set-point's sign decides the
 // saturated value). Rows 18..20 (q, q̇, z) are left untouched. Context: RT.

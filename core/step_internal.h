@@ -10,7 +10,18 @@
 extern "C" {
 #endif
 
-/* Hold the arm where it is: set-point at the joint positions, no motion, no feed-forward. */
+/* Where the drive reads joint j now: the joint encoder's filter output with its held error
+ * (quantisation, noise) and sensor faults, as the position loop sees it (joint.cpp); not the
+ * link angle x[URT_X_Q], nor d->q_fb, which is refreshed only with the outputs. A hold takes this, not the
+ * link's continuous position: the position loop is proportional on the quantised reading and
+ * the speed loop integrates, so a set-point between two counts is never met and the integrator
+ * winds the joint back and forth across the count (a limit cycle: after a power cycle at
+ * [0.5, -0.5, 0.5, 0, 0, 0] base and shoulder changed count in 27-31 % of 2 ms samples, noise
+ * off). A controller knows only the reading, and holding on it leaves no error to wind. */
+double urt__measured_q(const urt_data_t *d, int j);
+
+/* Hold the arm where it is: set-point at the measured joint positions, no motion, no
+ * feed-forward. */
 void urt__command_hold(urt_data_t *d);
 
 /* Refuse a bad command in d->cmd: protective stop and hold. Returns 0 or URT_EPSTOP. */

@@ -114,10 +114,10 @@ typedef struct recorded {
  * optimovej/l) added later, recorded from the code of dc1bf32 with the other twelve unchanged */
 static const recorded_t kRecorded[] = {
     {"gcc-O+fma",
-     {0x9eb0e2ef20710429ull, 0xf5e059c2622a9159ull, 0x03c17d250b80bd78ull,
-      0xcfdda02b9fe32fcdull, 0x9f05d82cc4cfd2d1ull, 0x0b06ff57800c551dull,
-      0xaa9d21088f6f80f5ull, 0x7001fa98b2e8d1a5ull, 0xa670d578fb3a323dull,
-      0xa607be079a720829ull, 0xc5dc97668d1219e2ull, 0x1b683c9b9087c81full,
+     {0xb4ab92369250a360ull, 0x664f9fea2e8115c1ull, 0xb00a57f6655ccc3bull,
+      0xcfdda02b9fe32fcdull, 0x323f3babfc76bb4dull, 0x0b06ff57800c551dull,
+      0xd02c00a0608f2fd6ull, 0x7001fa98b2e8d1a5ull, 0x9207c3add24fbdb6ull,
+      0xd21ce64f0de072aeull, 0xc5dc97668d1219e2ull, 0x1b683c9b9087c81full,
       0x922aab3a7fd14d39ull}},
 };
 
