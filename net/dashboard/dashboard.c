@@ -11,6 +11,7 @@
 
 #include <errno.h>
 #include <limits.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -349,7 +350,10 @@ static void cmd_load_installation(const call_t *c) {
 static void cmd_play(const call_t *c) {
   const urt_dashboard_robot_t *r = c->robot;
   int safe = r->safety_mode == URT_SAFETY_MODE_NORMAL || r->safety_mode == URT_SAFETY_MODE_REDUCED;
-  if (!c->st->program_loaded || r->robot_mode != URT_ROBOT_MODE_RUNNING || !safe) {
+  // a paused program resumes whatever sent it: one on 30001-30003 has nothing loaded, and a
+  // protective stop paused it (core/controller.cpp protective_stop)
+  bool have = c->st->program_loaded || r->program_state == URT_PROGRAM_PAUSED;
+  if (!have || r->robot_mode != URT_ROBOT_MODE_RUNNING || !safe) {
     put(c->w, "Failed to execute: play");
     return;
   }

@@ -1,13 +1,14 @@
 # SPDX-License-Identifier: Apache-2.0
 """The URScript VM in a real urtwin process: threads of one program run per controller tick, and a
 thread that loops without yielding gets UR's runtime error, the program stops, and every port
-keeps serving (net/urscript/script_sched.c)."""
+keeps serving (net/urscript/script_sched.c); a protective stop met while running pauses the
+program instead (net/urscript/script_controller.c)."""
 
 import re
 import socket
 import time
 
-from urtwin_proc import Emulator, PrimaryReader, RtReader
+from urtwin_proc import Dashboard, Emulator, PrimaryReader, RtReader
 
 RUNAWAY = """def runaway():
   thread spin():
@@ -135,3 +136,82 @@ def test_vm_cost_per_tick_is_counted_for_every_tick_of_a_program():
     # the slice of the program's first tick, then one per sync()
     assert n == ticks + 1
     assert 0 < p50 <= p99 <= p999 <= mx
+
+
+# ---- a protective stop pauses the program (net/urscript/README.md) ----
+
+TARGET = [0.3, -1.2, 1.0, -1.4, -1.5, 0.3]
+WALK = f"""def walk():
+  movej({TARGET}, a=1.0, v=0.3)
+  textmsg("arrived")
+end
+"""
+
+
+def rt_now(host):
+    """the newest 30003 packet: a fresh connection, so nothing stale is buffered"""
+    with RtReader(host) as rt:
+        return rt.read_decoded()
+
+
+def test_a_protective_stop_pauses_the_program_and_play_runs_the_move_again():
+    """A secondary program's protective_stop() during a movej: C209A0, no runtime exception, the
+    program paused (30003 program_state 4) and still paused after the unlock, the arm held; the
+    dashboard's play resumes it and the movej runs again from where the arm stopped to its
+    target, and the program ends normally."""
+    with Emulator() as emu:
+        with PrimaryReader(emu.host, 30001) as pr:
+            pr.read()
+            emu.send_script(WALK, port=30001)
+            time.sleep(0.5)
+            emu.send_script("sec stopper():\n  protective_stop()\nend\n", port=30002)
+            stop_msgs = pr.robot_messages(0.5)
+            assert rt_now(emu.host)["safety_mode"] == 3
+            emu.send_script("set unlock protective stop\n", port=30001)
+            time.sleep(0.3)
+            held = [rt_now(emu.host) for _ in range(2)]
+            d = Dashboard(emu.host)
+            assert d.ask("programState").startswith("PAUSED")
+            assert d.ask("play") == "Starting program"
+            d.close()
+            run_msgs = []
+            t_end = time.monotonic() + 10
+            while time.monotonic() < t_end and not any(
+                    m["type"] == 0 and m["text"] == "arrived" for m in run_msgs):
+                run_msgs += pr.robot_messages(0.2)
+            end = rt_now(emu.host)
+    errors = [(m["code"], m["argument"], m["level"]) for m in stop_msgs if m["type"] == 6]
+    print(f"\nerror codes {errors}; held at {held[1]['q_actual']}; ended at {end['q_actual']}")
+    assert errors == [(209, 0, 2)]
+    assert not [m for m in stop_msgs + run_msgs if m["type"] == 10]  # no runtime exception
+    for h in held:
+        assert h["safety_mode"] == 1 and h["program_state"] == 4  # unlocked, still paused
+    assert max(abs(a - b) for a, b in zip(held[0]["q_actual"], held[1]["q_actual"])) < 1e-4
+    assert max(abs(a - b) for a, b in zip(held[1]["q_actual"], TARGET)) > 0.05  # stopped midway
+    keys = [(m["title"], m["text"]) for m in run_msgs if m["type"] == 7]
+    assert any(m["type"] == 0 and m["text"] == "arrived" for m in run_msgs)
+    assert ("PROGRAM_XXX_STOPPED", "walk") in keys
+    assert max(abs(a - b) for a, b in zip(end["q_actual"], TARGET)) < 1e-3
+
+
+def test_a_line_out_of_the_workspace_is_a_warning_and_a_paused_program():
+    """URCL's test_send_script_blocking_fail_on_robot_errors in small: movel(p[10,0,0,0,0,0]) is
+    a protective stop with the error code C153A0 at WARNING level and no runtime exception;
+    `stop program` ends the paused program."""
+    with Emulator() as emu:
+        with PrimaryReader(emu.host, 30001) as pr:
+            pr.read()
+            emu.send_script("def out():\n  movel(p[10, 0, 0, 0, 0, 0])\nend\n", port=30001)
+            msgs = pr.robot_messages(0.6)
+            paused = rt_now(emu.host)
+            emu.send_script("stop program\n", port=30001)
+            after = pr.robot_messages(0.5)
+            stopped = rt_now(emu.host)
+    errors = [(m["code"], m["argument"], m["level"]) for m in msgs if m["type"] == 6]
+    print(f"\nerror codes {errors}")
+    assert errors == [(153, 0, 2)]
+    assert [m["safety_mode"] for m in msgs if m["type"] == 5] == [3]
+    assert not [m for m in msgs + after if m["type"] == 10]
+    assert paused["program_state"] == 4 and paused["safety_mode"] == 3
+    assert ("PROGRAM_XXX_STOPPED", "out") in [(m["title"], m["text"]) for m in after if m["type"] == 7]
+    assert stopped["program_state"] == 1
