@@ -118,7 +118,7 @@ static int read_wait(vm *V, const us_node *n, const char *name, double timeout, 
   V->steps = 0;
   us_sockets *t = table(V, n);
   if (!t) return X_ERR;
-  uint64_t limit = timeout_ticks(V, timeout), start = V->tick;
+  uint64_t limit = timeout_ticks(V, timeout), start = urt__us_run_tick(V);
   for (;;) {
     // looked up again after every wait: another thread may have closed it meanwhile
     us_sock *s = urt__us_sock_find(t, name);
@@ -129,7 +129,7 @@ static int read_wait(vm *V, const us_node *n, const char *name, double timeout, 
       *ok = r > 0;
       return X_OK;
     }
-    if (limit && V->tick - start >= limit) return X_OK;
+    if (limit && urt__us_run_tick(V) - start >= limit) return X_OK;
     if (urt__us_wait_tick(V, n) != X_OK) return X_ERR;
   }
 }
@@ -487,7 +487,7 @@ static int b_socket_open(vm *V, const us_node *n, sv *a, sv *out) {
     return urt__us_fail(V, n, "%s", text);
   }
   if (rc != US_SOCK_OK) return X_OK;  // refused, unreachable, unresolvable: False, as UR
-  uint64_t limit = timeout_ticks(V, timeout), start = V->tick;
+  uint64_t limit = timeout_ticks(V, timeout), start = urt__us_run_tick(V);
   for (;;) {
     if (urt__us_wait_tick(V, n) != X_OK) return X_ERR;  // the call's own cycle ends first
     s = urt__us_sock_find(t, name);
@@ -496,7 +496,7 @@ static int b_socket_open(vm *V, const us_node *n, sv *a, sv *out) {
       *out = mk_bool(st > 0);
       return X_OK;
     }
-    if (limit && V->tick - start >= limit) {
+    if (limit && urt__us_run_tick(V) - start >= limit) {
       urt__us_sock_close(s);
       return X_OK;
     }

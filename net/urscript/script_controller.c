@@ -168,8 +168,8 @@ int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *c
 int urt__us_wait_for(vm *V, const us_node *at, double t, bool check_motion, const char *what) {
   double period = urt__us_snap(V)->period > 0 ? V->snap.period : 0.002;
   double n = ceil(t / period - 1e-6);
-  uint64_t end = V->tick + (n > 0 ? (uint64_t)n : 0);
-  while (V->tick < end) {
+  uint64_t end = urt__us_run_tick(V) + (n > 0 ? (uint64_t)n : 0);
+  while (urt__us_run_tick(V) < end) {
     if (urt__us_wait_tick(V, at) != X_OK) {
       return X_ERR;
     }

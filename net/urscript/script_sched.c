@@ -107,6 +107,8 @@ typedef struct us_sched {
   us_err *err;
   size_t var_bytes;         /* every thread's variables count against one budget            */
   uint64_t tick;            /* the controller tick being processed                          */
+  uint64_t frozen;          /* ticks the program was paused, its threads not run             */
+  bool stop_paused;         /* the current pause came with a protective stop: not frozen     */
   us_thread *th[MAX_THREADS];
   int n;
   us_thread *main;
@@ -187,6 +189,7 @@ int urt__us_yield(vm *V) {
     return X_ERR;
   }
   V->tick = S->tick;
+  V->frozen = S->frozen;
   V->steps = 0;
   V->slice = 0;
   return X_OK;
@@ -250,6 +253,7 @@ static us_thread *thread_new(us_sched *S, const us_node *def, bool is_main, fram
   t->V->S = S;
   t->V->T = t;
   t->V->tick = S->tick;
+  t->V->frozen = S->frozen;
   t->id = ++S->next_id;
   t->def = def;
   t->is_main = is_main;
@@ -388,6 +392,34 @@ static void run_tick(us_sched *S) {
   reap(S);
 }
 
+/* A program the user paused is frozen, as on a controller (external_control.md, "Pause"):
+ * while the controller says PAUSED at this tick (dashboard `pause`), none of its threads runs,
+ * and the timeouts of sleep and socket reads, counted in the program's own ticks
+ * (urt__us_run_tick), stand still. The ROS driver stops writing while paused; a reverse-socket
+ * read that went on timing out would end URCL's program before `play`.
+ * A pause that came with a protective stop is not frozen: only the thread whose motion the
+ * stop interrupted waits (script_controller.c). URCL's UrDriverTest.read_error_code stops the
+ * arm with a secondary program's protective_stop() under the running external-control program,
+ * unlocks it, and the next test's TearDown/SetUp need that program to read its STOP and end,
+ * which it does against URSim; a frozen program would hold its sockets open and ignore them.
+ * Threads killed or a stop while frozen are handled at the next tick that runs, or by the
+ * cancellation (next_tick). A secondary program runs in one cycle and is not paused. */
+static bool frozen_at(us_sched *S) {
+  if (S->prog->secondary) {
+    return false;
+  }
+  urt_snapshot_t s;
+  urt__us_snap_at(S->h->host, S->tick, &s);
+  if (s.program_state != URT_PROGRAM_PAUSED) {
+    S->stop_paused = false;
+    return false;
+  }
+  if (s.safety_mode == URT_SAFETY_MODE_PROTECTIVE_STOP) {
+    S->stop_paused = true;  // this pause is the stop's, until the program plays again
+  }
+  return !S->stop_paused;
+}
+
 /* the calling thread's CPU time [ns]: a tick's VM cost without the time the OS ran others */
 static uint64_t thread_cpu_ns(void) {
   struct timespec ts;
@@ -467,7 +499,11 @@ int urt__us_run(const us_prog *p, const us_hooks *h, us_err *err) {
     if (!p->secondary && urt__us_service_tick(&S->service, h, S->tick, err) != X_OK) {
       break;  // the watchdog fired: the program stops with its message
     }
-    run_tick(S);
+    if (frozen_at(S)) {
+      S->frozen++;  // paused: no thread runs, and the program's timeouts stand still
+    } else {
+      run_tick(S);
+    }
     if (tick_done) {
       tick_done(h->host->ctx, S->tick, true);
     }

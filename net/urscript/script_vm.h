@@ -114,8 +114,10 @@ typedef struct vm {
   sv retval;        /* heap-owned value of the last `return` */
   bool halted;      /* `halt` inside a function: unwinds as X_ERR with no error */
   size_t *var_bytes; /* shared: heap held by variables (bounded by MAX_VAR_BYTES) */
-  /* time: the controller tick the scheduler is running (every thread sees the same) */
+  /* time: the controller tick the scheduler is running (every thread sees the same), and the
+   * ticks the program has spent paused so far, frozen (script_sched.c) */
   uint64_t tick;
+  uint64_t frozen;
   /* motion time the last scaled wait ran past its t, and the tick it ended at: a wait that
    * starts in that same tick continues the stream (urt__us_wait_scaled) */
   double motion_carry;
@@ -124,6 +126,12 @@ typedef struct vm {
   int64_t slice;    /* steps since this thread was last resumed (its share of this frame) */
   urt_snapshot_t snap;
 } vm;
+
+/* the program's own time in ticks: the controller's less those it spent paused. Timeouts
+ * (sleep, socket reads) count these, so a pause freezes them as it freezes the threads. */
+static inline uint64_t urt__us_run_tick(const vm *V) {
+  return V->tick - V->frozen;
+}
 
 enum { X_OK = 0, X_ERR, X_RETURN, X_BREAK, X_CONTINUE, X_HALT };
 

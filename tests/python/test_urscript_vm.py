@@ -215,3 +215,32 @@ def test_a_line_out_of_the_workspace_is_a_warning_and_a_paused_program():
     assert paused["program_state"] == 4 and paused["safety_mode"] == 3
     assert ("PROGRAM_XXX_STOPPED", "out") in [(m["title"], m["text"]) for m in after if m["type"] == 7]
     assert stopped["program_state"] == 1
+
+
+def test_a_dashboard_pause_freezes_the_program_and_its_sleep():
+    """dashboard pause 0.2 s into a 0.6 s sleep, 1 s long: nothing runs while paused (no
+    "woke"), and after play the sleep still has its 0.4 s to go (script_sched.c frozen_at)"""
+    with Emulator() as emu:
+        with PrimaryReader(emu.host, 30001) as pr:
+            pr.read()
+            d = Dashboard(emu.host)
+            emu.send_script('def slow():\n  sleep(0.6)\n  textmsg("woke")\nend\n', port=30001)
+            time.sleep(0.2)
+            assert d.ask("pause") == "Pausing program"
+            t_pause = time.monotonic()
+            paused_msgs = pr.robot_messages(1.0)
+            state = rt_now(emu.host)["program_state"]
+            assert d.ask("play") == "Starting program"
+            t_play = time.monotonic()
+            woke_at = None
+            t_end = t_play + 3.0
+            while woke_at is None and time.monotonic() < t_end:
+                for m in pr.robot_messages(0.05):
+                    if m["type"] == 0 and m["text"] == "woke":
+                        woke_at = time.monotonic()
+            d.close()
+    print(f"\npaused {t_play - t_pause:.2f} s; woke {woke_at - t_play if woke_at else None} s after play")
+    assert state == 4
+    assert not [m for m in paused_msgs if m["type"] == 0 and m["text"] == "woke"]
+    assert woke_at is not None
+    assert 0.25 <= woke_at - t_play <= 1.5  # the 0.4 s the sleep had left (wall time, loaded host)

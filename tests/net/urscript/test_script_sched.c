@@ -417,6 +417,35 @@ static void test_sched__reports_each_ticks_slice_to_the_controller(void **state)
   assert_int_equal(R.n, n);
 }
 
+/* a dashboard pause freezes the program: no thread runs and sleep's time stands still, so a
+ * 0.1 s sleep (50 ticks) begun at tick 0 and paused for ticks 10-39 ends at tick 80, not 50 */
+static void test_sched__a_paused_program_is_frozen_with_its_timeouts(void **state) {
+  F.s.program_state = URT_PROGRAM_PLAYING;
+  F.pause_from = 10;
+  F.pause_until = 40;
+  must_run("thread t():\n  sleep(0.04)\n  set_standard_digital_out(1, True)\nend\n"
+           "run t()\nsleep(0.1)\nset_standard_digital_out(0, True)\n");
+  int k0 = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, 0);
+  int k1 = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, k0 + 1);
+  assert_true(k0 >= 0 && k1 > k0);
+  assert_int_equal(F.cmd[k0].index, 1);
+  assert_int_equal(F.cmd_vm_tick[k0], 50);  // the thread's 20 ticks: 10 before, 10 after
+  assert_int_equal(F.cmd[k1].index, 0);
+  assert_int_equal(F.cmd_vm_tick[k1], 80);
+}
+
+/* a pause that comes with a protective stop is not frozen: the threads run on (URCL's
+ * read_error_code needs the external-control program to read its STOP after the unlock) */
+static void test_sched__a_pause_with_a_protective_stop_is_not_frozen(void **state) {
+  F.s.program_state = URT_PROGRAM_PLAYING;
+  F.pstop_at = 10;
+  F.pause_until = 40;
+  must_run("sleep(0.1)\nset_standard_digital_out(0, True)\n");
+  int k = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, 0);
+  assert_true(k >= 0);
+  assert_int_equal(F.cmd_vm_tick[k], 50);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup(test_sched__threads_interleave_one_tick_per_wait, setup),
@@ -432,6 +461,8 @@ int main(void) {
       cmocka_unit_test_setup(test_sched__recursion_limit_in_a_thread, setup),
       cmocka_unit_test_setup(test_sched__secondary_program_may_not_start_threads, setup),
       cmocka_unit_test_setup(test_sched__reports_each_ticks_slice_to_the_controller, setup),
+      cmocka_unit_test_setup(test_sched__a_paused_program_is_frozen_with_its_timeouts, setup),
+      cmocka_unit_test_setup(test_sched__a_pause_with_a_protective_stop_is_not_frozen, setup),
   };
   return cmocka_run_group_tests_name("net/urscript/script_sched", tests, NULL, NULL);
 }
