@@ -22,14 +22,24 @@ int urt__us_service_tick(us_service *sv, const us_hooks *h, uint64_t tick, us_er
   uint64_t k = sv->n++ % US_HIST;
   memcpy(sv->f[k], s.tcp_force, sizeof sv->f[k]);  // already less zero_ftsensor's offset
 
-  // rtde_set_watchdog(…, "stop"): a refresh within 1 / f (one tick of slack)
+  // rtde_set_watchdog: a refresh within 1 / f (one tick of slack). A paused program's watchdog
+  // waits: it is armed again from the tick the program plays.
   if (sv->wd_on && host->read_registers) {
     urt_rtde_registers_t r;
     host->read_registers(host->ctx, tick, &r);
     uint32_t n = sv->wd_double ? r.in_double_writes[sv->wd_reg] : r.in_int_writes[sv->wd_reg];
-    if (n != sv->wd_count || sv->wd_last < 0) {
+    if (s.program_state == URT_PROGRAM_PAUSED) {
+      sv->wd_last = -1;
+    } else if (n != sv->wd_count || sv->wd_last < 0) {
       sv->wd_count = n;
       sv->wd_last = s.time;
+    } else if (s.time - sv->wd_last > sv->wd_period + s.period + 1e-9 && sv->wd_pause) {
+      // "pause": the program pauses (and is frozen, script_sched.c) until `play`; a command
+      // ring that is full is asked again at the next tick
+      urt_ctrl_cmd_t c = {.kind = URT_CTRL_PAUSE, .tick = tick};
+      if (host->submit(host->ctx, &c)) {
+        sv->wd_last = -1;
+      }
     } else if (s.time - sv->wd_last > sv->wd_period + s.period + 1e-9) {
       if (err->kind == US_ERR_NONE) {
         err->kind = US_ERR_RUNTIME;
@@ -77,9 +87,9 @@ static int b_zero_ftsensor(vm *V, const us_node *n, sv *a, sv *out) {
   return urt__us_submit(V, n, &c);
 }
 
-/* rtde_set_watchdog(variable_name, min_frequency, action="pause"): "stop" stops the program when
- * the input register is not written within 1 / min_frequency; "ignore" (or f = 0) turns it off.
- * "pause" is refused: urtwin has no paused-program state for a watchdog to resume from. */
+/* rtde_set_watchdog(variable_name, min_frequency, action="pause"): when the input register is
+ * not written within 1 / min_frequency, "pause" (UR's default) pauses the program until
+ * dashboard `play`, "stop" stops it; "ignore" (or f = 0) turns it off. */
 static int b_rtde_set_watchdog(vm *V, const us_node *n, sv *a, sv *out) {
   double f;
   if (a[0].t != V_STR) return urt__us_fail(V, n, "Type error: rtde_set_watchdog: variable_name must be a string");
@@ -110,12 +120,14 @@ static int b_rtde_set_watchdog(vm *V, const us_node *n, sv *a, sv *out) {
     sv->wd_on = false;
     return X_OK;
   }
-  if (!(alen == 4 && memcmp(action, "stop", 4) == 0)) {
-    return urt__us_fail(V, n, "rtde_set_watchdog: action \"%.*s\" is not supported by urtwin (only "
-                              "\"stop\" and \"ignore\")", alen, action);
+  bool pause = alen == 5 && memcmp(action, "pause", 5) == 0;
+  if (!pause && !(alen == 4 && memcmp(action, "stop", 4) == 0)) {
+    return urt__us_fail(V, n, "rtde_set_watchdog: unknown action \"%.*s\" (\"pause\", \"stop\" or "
+                              "\"ignore\")", alen, action);
   }
   if (!(f >= 0)) return urt__us_fail(V, n, "rtde_set_watchdog: negative frequency %g", f);
   sv->wd_on = f > 0;
+  sv->wd_pause = pause;
   sv->wd_double = dbl;
   sv->wd_reg = reg;
   sv->wd_period = f > 0 ? 1.0 / f : 0;

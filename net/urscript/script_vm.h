@@ -186,7 +186,7 @@ us_force_state *urt__us_force_state(vm *V);
 typedef struct us_service {
   uint64_t n;                      /* ticks recorded */
   double f[US_HIST][6];            /* TCP force per tick (tool_contact) */
-  bool wd_on, wd_double;           /* rtde_set_watchdog */
+  bool wd_on, wd_double, wd_pause; /* rtde_set_watchdog (wd_pause: action "pause", not "stop") */
   int wd_reg;
   double wd_period, wd_last;
   uint32_t wd_count;

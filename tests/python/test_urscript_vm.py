@@ -244,3 +244,31 @@ def test_a_dashboard_pause_freezes_the_program_and_its_sleep():
     assert not [m for m in paused_msgs if m["type"] == 0 and m["text"] == "woke"]
     assert woke_at is not None
     assert 0.25 <= woke_at - t_play <= 1.5  # the 0.4 s the sleep had left (wall time, loaded host)
+
+
+def test_an_rtde_watchdog_with_pause_pauses_the_program_until_play():
+    """rtde_set_watchdog(register, 4 Hz, "pause") with no writes: the program pauses (30003
+    program_state 4) and does not end; after play it runs again and, still without writes, the
+    watchdog pauses it again (script_service.c)"""
+    prog = ('def watched():\n  rtde_set_watchdog("input_int_register_0", 4, "pause")\n'
+            '  while True:\n    sync()\n  end\nend\n')
+    with Emulator() as emu:
+        with PrimaryReader(emu.host, 30001) as pr:
+            pr.read()
+            emu.send_script(prog, port=30001)
+            time.sleep(0.8)
+            first = rt_now(emu.host)["program_state"]
+            d = Dashboard(emu.host)
+            assert d.ask("play") == "Starting program"
+            t_end = time.monotonic() + 1.0  # the resume takes effect at the next tick
+            playing = rt_now(emu.host)["program_state"]
+            while playing != 2 and time.monotonic() < t_end:
+                playing = rt_now(emu.host)["program_state"]
+            time.sleep(0.8)
+            again = rt_now(emu.host)["program_state"]
+            assert d.ask("stop") == "Stopped"
+            d.close()
+            msgs = pr.robot_messages(0.3)
+    print(f"\nprogram_state: {first} after 0.8 s, {playing} after play, {again} 0.8 s later")
+    assert (first, playing, again) == (4, 2, 4)
+    assert not [m for m in msgs if m["type"] == 10]
