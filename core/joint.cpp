@@ -177,9 +177,7 @@ JointInput joint_input(const urt_model_t* m, const urt_data_t* d, int j, double 
   in.eps_q = d->eps_q[j];
   in.drives_engaged = m->drives_engaged;
   in.torque = (int)((c.torque_mask >> j) & 1u);
-  if ((d->faults.joint_mask >> j) & 1u) {
-    in.fault = &d->faults.joint[j];
-  }
+  in.fault = joint_fault(d, j);
   return in;
 }
 

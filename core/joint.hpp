@@ -50,6 +50,11 @@ struct JointAux {
   urt_friction_out_t fr;  // friction torque, bristle rate and partials (joint_rates only)
 };
 
+// The joint's faults (urt/faults.h), or nullptr for a healthy joint. Context: RT.
+inline const urt_fault_joint_t* joint_fault(const urt_data_t* d, int j) noexcept {
+  return ((d->faults.joint_mask >> j) & 1u) ? &d->faults.joint[j] : nullptr;
+}
+
 // The joint encoder's reading: its filter's output p plus the held error eps_q, through a
 // sensor fault when the joint has one (a stuck value, a bias, noise). Context: RT.
 inline double joint_q_reading(double p, double eps_q, const urt_fault_joint_t* fj) noexcept {

@@ -85,8 +85,7 @@ void outputs_drive(const urt_model_t* m, urt_data_t* d) {
 }  // namespace
 
 extern "C" double urt__measured_q(const urt_data_t* d, int j) {
-  const urt_fault_joint_t* fj = ((d->faults.joint_mask >> j) & 1u) ? &d->faults.joint[j] : nullptr;
-  return urt::core::joint_q_reading(d->x[j][URT_X_P], d->eps_q[j], fj);
+  return urt::core::joint_q_reading(d->x[j][URT_X_P], d->eps_q[j], urt::core::joint_fault(d, j));
 }
 
 extern "C" void urt_sensors_sample(const urt_model_t* m, urt_data_t* d) {

@@ -102,14 +102,27 @@ void urt__script_broadcast_text(urt_emulator_t *e, const char *text) {
  * the service note). URCL's sendScriptBlocking fails on it, as URCL's
  * test_send_script_blocking_fail_on_robot_errors expects for a movel out of the workspace.
  * Stops with other causes (targets outside the joint limits, refused before they run) get the
- * SAFETY_MODE message only: urtwin does not model UR's error codes for them. Code, argument and report data of SAFETY_MODE are 0:
- * their values on a real controller are not documented. Called before the tick's robot state,
+ * SAFETY_MODE message only: urtwin does not model UR's error codes for them. Code, argument
+ * and report data of SAFETY_MODE are 0: their values on a real controller are not documented. Called before the tick's robot state,
  * so that on unlock the NORMAL message precedes the state that clears the flag; and a change
  * sends that state in the same tick (urt__script_stream_tick), not at the next 10 Hz one:
  * URCL's test_read_safety_mode sees PROTECTIVE_STOP in the message, then asks for an unlock
  * and waits 1 ms for RobotModeData's flag to clear, which it expects to time out; with the
  * state 100 ms behind, the flag it read was still the old, clear one. */
-#define C153_TEXT "Protective Stop: the motion was stopped at a limit of the robot"
+/* one ERROR_CODE message (argument 0) on the primary interface, and its line in the log */
+static void send_error_code(urt_emulator_t *e, const urt_snapshot_t *s, int32_t code,
+                            int32_t level, const char *text) {
+  char line[160];
+  snprintf(line, sizeof line, "C%dA0: %s", (int)code, text);
+  urt_ctrl_log_add(&e->log, s->time, level == URT_PRIMARY_REPORT_WARNING ? "WARN" : "ERROR", line);
+  uint8_t buf[256];
+  uint64_t ts = (uint64_t)(s->time * 1e6 + 0.5);
+  int n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, code, 0, level, 0, 0,
+                                        text, buf, sizeof buf);
+  if (n > 0) {
+    urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
+  }
+}
 
 bool urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
   int32_t mode = s->safety_mode;
@@ -139,36 +152,18 @@ bool urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
   snprintf(line, sizeof line, "safety mode %s%s",
            mode >= 1 && mode <= 9 ? kMode[mode] : "(unknown)", cause);
   urt_ctrl_log_add(&e->log, s->time, mode == URT_SAFETY_MODE_NORMAL ? "INFO" : "WARN", line);
-  if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP && (s->ctrl_fault & URT_CTRL_FAULT_SCRIPT_PSTOP)) {
-    urt_ctrl_log_add(&e->log, s->time, "WARN", "C209A0: A protective stop was triggered");
-    n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 209, 0,
-                                      URT_PRIMARY_REPORT_WARNING, 0, 0,
-                                      "A protective stop was triggered", buf, sizeof buf);
-    if (n > 0) {
-      urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
-    }
+  if (mode != URT_SAFETY_MODE_PROTECTIVE_STOP) {
+    return true;
   }
-  if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP &&
-      (s->ctrl_fault & (URT_CTRL_FAULT_IK | URT_CTRL_FAULT_PSTOP)) &&
-      !(s->ctrl_fault & (URT_CTRL_FAULT_SCRIPT_PSTOP | URT_CTRL_FAULT_JUMP | URT_CTRL_FAULT_BAD_TARGET))) {
-    urt_ctrl_log_add(&e->log, s->time, "WARN", "C153A0: " C153_TEXT);
-    n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 153, 0,
-                                      URT_PRIMARY_REPORT_WARNING, 0, 0, C153_TEXT, buf,
-                                      sizeof buf);
-    if (n > 0) {
-      urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
-    }
-  }
-  if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP && (s->ctrl_fault & URT_CTRL_FAULT_JUMP)) {
-    urt_ctrl_log_add(&e->log, s->time, "ERROR",
-                     "C204A0: Protective Stop: Invalid setpoints: Position jump");
-    n = urt_primary_encode_error_code(ts, URT_PRIMARY_SOURCE_RT_MACHINE, 204, 0,
-                                      URT_PRIMARY_REPORT_VIOLATION, 0, 0,
-                                      "Protective Stop: Invalid setpoints: Position jump", buf,
-                                      sizeof buf);
-    if (n > 0) {
-      urt__send_to(e, is_primary, buf, (size_t)n, NULL, NULL);
-    }
+  const uint32_t f = s->ctrl_fault;
+  if (f & URT_CTRL_FAULT_SCRIPT_PSTOP) {
+    send_error_code(e, s, 209, URT_PRIMARY_REPORT_WARNING, "A protective stop was triggered");
+  } else if (f & URT_CTRL_FAULT_JUMP) {
+    send_error_code(e, s, 204, URT_PRIMARY_REPORT_VIOLATION,
+                    "Protective Stop: Invalid setpoints: Position jump");
+  } else if ((f & (URT_CTRL_FAULT_IK | URT_CTRL_FAULT_PSTOP)) && !(f & URT_CTRL_FAULT_BAD_TARGET)) {
+    send_error_code(e, s, 153, URT_PRIMARY_REPORT_WARNING,
+                    "Protective Stop: the motion was stopped at a limit of the robot");
   }
   return true;
 }

@@ -33,14 +33,16 @@ int urt__us_service_tick(us_service *sv, const us_hooks *h, uint64_t tick, us_er
     } else if (n != sv->wd_count || sv->wd_last < 0) {
       sv->wd_count = n;
       sv->wd_last = s.time;
-    } else if (s.time - sv->wd_last > sv->wd_period + s.period + 1e-9 && sv->wd_pause) {
-      // "pause": the program pauses (and is frozen, script_sched.c) until `play`; a command
-      // ring that is full is asked again at the next tick
-      urt_ctrl_cmd_t c = {.kind = URT_CTRL_PAUSE, .tick = tick};
-      if (host->submit(host->ctx, &c)) {
-        sv->wd_last = -1;
-      }
     } else if (s.time - sv->wd_last > sv->wd_period + s.period + 1e-9) {
+      if (sv->wd_pause) {
+        // "pause": the program pauses (and is frozen, script_sched.c) until `play`; a command
+        // ring that is full is asked again at the next tick
+        urt_ctrl_cmd_t c = {.kind = URT_CTRL_PAUSE, .tick = tick};
+        if (host->submit(host->ctx, &c)) {
+          sv->wd_last = -1;
+        }
+        return X_OK;
+      }
       if (err->kind == US_ERR_NONE) {
         err->kind = US_ERR_RUNTIME;
         snprintf(err->text, sizeof err->text,

@@ -26,8 +26,7 @@ typedef struct fake_host {
                                a playing program, as the controller's (controller.cpp)     */
   uint64_t unlock_at;       /* nonzero: the protective stop is unlocked at this tick      */
   uint64_t resume_at;       /* nonzero: a paused program resumes (`play`) at this tick     */
-  uint64_t pause_from, pause_until;  /* nonzero: a dashboard `pause` at pause_from, `play` at
-                                        pause_until (a playing program; pstop_at: with a stop) */
+  uint64_t pause_from;      /* nonzero: a dashboard `pause` of a playing program at this tick */
   uint64_t pstop_at;        /* nonzero: a protective stop at this tick (program paused too)  */
   int full_for;             /* refuse this many submits (ring full)            */
   int tick_sleep_us;        /* real time per tick (0: as fast as asked)        */
@@ -120,10 +119,6 @@ static inline uint64_t fake_wait_tick(void *ctx, uint64_t after, int timeout_ms)
     if (f->pstop_at && f->s.tick == f->pstop_at) {
       f->s.safety_mode = URT_SAFETY_MODE_PROTECTIVE_STOP;
       if (f->s.program_state == URT_PROGRAM_PLAYING) f->s.program_state = URT_PROGRAM_PAUSED;
-    }
-    if (f->pause_until && f->s.tick == f->pause_until) {
-      f->s.safety_mode = URT_SAFETY_MODE_NORMAL;
-      if (f->s.program_state == URT_PROGRAM_PAUSED) f->s.program_state = URT_PROGRAM_PLAYING;
     }
     if (f->ramp) {  // readings that differ every tick
       f->s.q_target[0] = 0.001 * (double)f->s.tick;

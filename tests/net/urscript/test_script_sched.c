@@ -422,7 +422,7 @@ static void test_sched__reports_each_ticks_slice_to_the_controller(void **state)
 static void test_sched__a_paused_program_is_frozen_with_its_timeouts(void **state) {
   F.s.program_state = URT_PROGRAM_PLAYING;
   F.pause_from = 10;
-  F.pause_until = 40;
+  F.resume_at = 40;
   must_run("thread t():\n  sleep(0.04)\n  set_standard_digital_out(1, True)\nend\n"
            "run t()\nsleep(0.1)\nset_standard_digital_out(0, True)\n");
   int k0 = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, 0);
@@ -439,7 +439,8 @@ static void test_sched__a_paused_program_is_frozen_with_its_timeouts(void **stat
 static void test_sched__a_pause_with_a_protective_stop_is_not_frozen(void **state) {
   F.s.program_state = URT_PROGRAM_PLAYING;
   F.pstop_at = 10;
-  F.pause_until = 40;
+  F.unlock_at = 40;
+  F.resume_at = 40;
   must_run("sleep(0.1)\nset_standard_digital_out(0, True)\n");
   int k = fake_find_cmd(&F, URT_CTRL_SET_DIGITAL_OUT, 0);
   assert_true(k >= 0);
