@@ -570,6 +570,12 @@ int main(int argc, char** argv) {
                (unsigned long long)es.script_tick.late_max);
   std::fprintf(stderr, "urtwin: urscript threads preempted for computing a whole slice: %llu\n",
                (unsigned long long)es.script_tick.preempted);
+  std::fprintf(stderr,
+               "urtwin: urscript program start: arrival to PROGRAM_XXX_STARTED p50 %.1f ms max "
+               "%.1f ms over %llu programs (compile p50 %.1f ms max %.1f ms)\n",
+               es.script_tick.start_p50 * 1e3, es.script_tick.start_max * 1e3,
+               (unsigned long long)es.script_tick.starts, es.script_tick.compile_p50 * 1e3,
+               es.script_tick.compile_max * 1e3);
   urt_loop_stats_t s;
   urt_loop_get_stats(loop, &s);
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",

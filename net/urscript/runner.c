@@ -33,6 +33,7 @@ typedef struct unit {
   size_t len;
   bool sec;
   uint64_t seq;   /* main units: their place in submission order */
+  uint64_t arrived_ns;  /* CLOCK_MONOTONIC at urt_runner_submit */
 } unit;
 
 struct urt_runner {
@@ -53,11 +54,24 @@ struct urt_runner {
   urt_exec_hist_t tick_cpu;  /* main programs' VM work per tick (runner thread writes) */
   uint64_t late_slices, late_max;  /* slices taken after their tick had passed (us_hooks) */
   uint64_t preempted;              /* threads preempted for computing a whole slice (us_hooks) */
+  urt_exec_hist_t start_wall;      /* main programs: arrival to PROGRAM_XXX_STARTED (wall) */
+  urt_exec_hist_t compile_wall;    /* main programs: their compile (wall) */
   /* the running main program (runner thread only) */
   uint64_t cur_seq, cur_stop;
 };
 
 //---- helpers (runner thread) ----
+
+static uint64_t mono_ns(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (uint64_t)t.tv_sec * 1000000000u + (uint64_t)t.tv_nsec;
+}
+
+static uint64_t since_ns(uint64_t from) {
+  uint64_t now = mono_ns();
+  return now > from ? now - from : 0;
+}
 
 static double now_time(urt_runner_t *r) {
   urt_snapshot_t s;
@@ -169,10 +183,12 @@ static void run_main(urt_runner_t *r, const unit *u) {
   us_err e;
 
   // compile first: a program with a compile error never starts, nothing moves
+  uint64_t compile_from = mono_ns();
   if (urt__us_parse(u->text, u->len, &p, &e) != 0) {
     report(r, &e, false);
     return;
   }
+  urt_exec_hist_add(&r->compile_wall, since_ns(compile_from));
 
   // the ports open before the physics thread publishes its first tick, and a program that
   // came in between read the snapshot of none (robot mode 0): its first move was refused as
@@ -186,6 +202,7 @@ static void run_main(urt_runner_t *r, const unit *u) {
 
   set_state(r, URT_PROGRAM_PLAYING);
   emit_key(r, "PROGRAM_XXX_STARTED", p->name);
+  urt_exec_hist_add(&r->start_wall, since_ns(u->arrived_ns));
   us_hooks h = {.host = &r->host, .sockets = r->sockets, .motion_id = &r->motion_id,
                 .step_budget = r->cfg.step_budget, .wait_timeout_ms = r->cfg.wait_timeout_ms,
                 .poll = poll_main, .poll_ctx = r, .tick_cpu = &r->tick_cpu,
@@ -323,7 +340,7 @@ int urt_runner_submit(urt_runner_t *r, const char *text, size_t len) {
   }
   memcpy(copy, text, len);
   copy[len] = 0;
-  unit u = {.text = copy, .len = len, .sec = is_sec_unit(text, len)};
+  unit u = {.text = copy, .len = len, .sec = is_sec_unit(text, len), .arrived_ns = mono_ns()};
 
   pthread_mutex_lock(&r->mu);
   if (r->qn == QUEUE_CAP) {
@@ -410,4 +427,9 @@ void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out) 
   out->late_slices = __atomic_load_n(&r->late_slices, __ATOMIC_RELAXED);
   out->late_max = __atomic_load_n(&r->late_max, __ATOMIC_RELAXED);
   out->preempted = __atomic_load_n(&r->preempted, __ATOMIC_RELAXED);
+  out->start_p50 = urt_exec_hist_quantile(&r->start_wall, 0.50);
+  out->start_max = urt_exec_hist_max(&r->start_wall);
+  out->starts = urt_exec_hist_count(&r->start_wall);
+  out->compile_p50 = urt_exec_hist_quantile(&r->compile_wall, 0.50);
+  out->compile_max = urt_exec_hist_max(&r->compile_wall);
 }

@@ -148,6 +148,12 @@ typedef struct urt_runner_tick_stats {
   /* URScript threads preempted until the next tick for running a whole slice (step_budget
    * steps) without waiting: a program computing more than UR's time slice, or spinning */
   uint64_t preempted;
+  /* main programs' wall time from their arrival (urt_runner_submit) to PROGRAM_XXX_STARTED
+   * [s]: the previous program's end, the compile, the controller's first tick. Clients time
+   * it (URCL waits 100 ms after re-sending its program), so a slow start is named here. */
+  double start_p50, start_max;
+  uint64_t starts;
+  double compile_p50, compile_max;  /* of that, the compile [s] */
 } urt_runner_tick_stats_t;
 void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out);
 
