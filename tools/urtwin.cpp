@@ -576,6 +576,11 @@ int main(int argc, char** argv) {
                es.script_tick.start_p50 * 1e3, es.script_tick.start_max * 1e3,
                (unsigned long long)es.script_tick.starts, es.script_tick.compile_p50 * 1e3,
                es.script_tick.compile_max * 1e3);
+  std::fprintf(stderr,
+               "urtwin: urscript socket_open waited for a local server's accept: %llu times (at "
+               "most %llu ticks)\n",
+               (unsigned long long)es.script_tick.accept_waits,
+               (unsigned long long)es.script_tick.accept_wait_max);
   urt_loop_stats_t s;
   urt_loop_get_stats(loop, &s);
   std::fprintf(stderr, "urtwin: stopped after %llu ticks, %llu overruns, %llu missed periods\n",

@@ -432,4 +432,6 @@ void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out) 
   out->starts = urt_exec_hist_count(&r->start_wall);
   out->compile_p50 = urt_exec_hist_quantile(&r->compile_wall, 0.50);
   out->compile_max = urt_exec_hist_max(&r->compile_wall);
+  out->accept_waits = __atomic_load_n(&r->sockets->accept_waits, __ATOMIC_RELAXED);
+  out->accept_wait_max = __atomic_load_n(&r->sockets->accept_wait_max, __ATOMIC_RELAXED);
 }

@@ -259,6 +259,77 @@ int urt__us_sock_poll_connect(us_sock *s) {
   return 1;
 }
 
+/* one /proc/self/net/tcp[6] file: the rx_queue of a LISTEN line on port whose address is addr
+ * (len 4 or 16 bytes, network order) or the wildcard; -1 if none */
+static int listen_backlog_in(const char *path, const uint8_t *addr, size_t alen, int port) {
+  FILE *f = fopen(path, "r");
+  if (!f) {
+    return -1;
+  }
+  char line[512], local[64];
+  unsigned lport, st, txq, rxq;
+  int found = -1;
+  if (!fgets(line, sizeof line, f)) {  // the header
+    fclose(f);
+    return -1;
+  }
+  while (found < 0 && fgets(line, sizeof line, f)) {
+    // "  sl  local_address rem_address   st tx_queue:rx_queue ..."
+    if (sscanf(line, " %*u: %63[0-9A-Fa-f]:%x %*[0-9A-Fa-f]:%*x %x %x:%x", local, &lport, &st,
+               &txq, &rxq) != 5 || st != 0x0A || (int)lport != port) {
+      continue;
+    }
+    // the kernel prints each 32-bit word of the address as it lies in memory, in %08X
+    size_t words = strlen(local) / 8;
+    if (words * 4 != alen) {
+      continue;
+    }
+    uint8_t a[16];
+    bool any = true;
+    for (size_t w = 0; w < words; w++) {
+      char hex[9];
+      memcpy(hex, local + 8 * w, 8);
+      hex[8] = 0;
+      uint32_t v = (uint32_t)strtoul(hex, NULL, 16);
+      memcpy(a + 4 * w, &v, 4);
+      any = any && v == 0;
+    }
+    if (any || memcmp(a, addr, alen) == 0) {
+      found = (int)rxq;
+    }
+  }
+  fclose(f);
+  return found;
+}
+
+int urt__us_sock_peer_backlog(const us_sock *s) {
+  if (!s || s->state != US_SOCK_OPEN) {
+    return -1;
+  }
+  struct sockaddr_storage sa;
+  socklen_t len = sizeof sa;
+  if (getpeername(s->fd, (struct sockaddr *)&sa, &len) != 0 ||
+      !is_loopback((const struct sockaddr *)&sa)) {
+    return -1;
+  }
+  if (sa.ss_family == AF_INET) {
+    const struct sockaddr_in *in = (const struct sockaddr_in *)&sa;
+    int port = ntohs(in->sin_port);
+    int n = listen_backlog_in("/proc/self/net/tcp", (const uint8_t *)&in->sin_addr, 4, port);
+    if (n < 0) {
+      // a dual-stack listener (bound to ::) holds IPv4 connections too
+      uint8_t mapped[16] = {0};
+      mapped[10] = mapped[11] = 0xff;
+      memcpy(mapped + 12, &in->sin_addr, 4);
+      n = listen_backlog_in("/proc/self/net/tcp6", mapped, 16, port);
+    }
+    return n;
+  }
+  const struct sockaddr_in6 *in6 = (const struct sockaddr_in6 *)&sa;
+  return listen_backlog_in("/proc/self/net/tcp6", (const uint8_t *)&in6->sin6_addr, 16,
+                           ntohs(in6->sin6_port));
+}
+
 //---- data ----
 
 static void flush_tx(us_sock *s) {

@@ -47,6 +47,9 @@ typedef struct us_sockets {
   us_sock s[US_SOCK_MAX];
   int n_allow;
   char allow[US_SOCK_MAX_ALLOW][US_SOCK_HOST];
+  /* socket_opens that waited for a peer on this machine to accept (b_socket_open), and the
+   * most ticks one waited: read by the runner's statistics (any thread, relaxed) */
+  uint64_t accept_waits, accept_wait_max;
 } us_sockets;
 
 /* An empty table (heap: it is large) allowing loopback and the n named hosts (copied; a
@@ -85,6 +88,12 @@ int urt__us_sock_connect(us_sockets *t, const char *name, const char *host, int 
 
 /* Advance a connecting socket: 1 open, 0 still connecting, -1 failed (the socket is freed). */
 int urt__us_sock_poll_connect(us_sock *s);
+
+/* How many connections the listener this open socket dialled holds that it has not accepted
+ * yet (its accept queue, the rx_queue of its LISTEN line in /proc/self/net/tcp or tcp6), when
+ * that listener is on this machine; -1 when it is not, or the kernel does not say. Reads a
+ * /proc file: socket_open's end only, never per tick. */
+int urt__us_sock_peer_backlog(const us_sock *s);
 
 /* Push out a queued rest of a write and, once per controller tick, move what the kernel holds
  * into s->rx (up to its capacity); sets s->eof when the peer closed. Reads within one tick see

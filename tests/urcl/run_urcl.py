@@ -237,7 +237,7 @@ def timing_lines(log_path):
     try:
         with open(log_path, errors="replace") as f:
             for line in f:
-                if re.search(r"taken late|overruns|program start|SCHED_FIFO|---- start", line):
+                if re.search(r"taken late|overruns|program start|accept|SCHED_FIFO|---- start", line):
                     line = line.strip()
                     if line.startswith("---- start"):
                         line = "start, " + ("--rt-priority" if "--rt-priority" in line

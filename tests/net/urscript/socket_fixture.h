@@ -41,6 +41,7 @@ typedef struct fixture {
   char got[4096];      /* what the program sent */
   size_t n_got;
   bool echo;           /* send back what the program sent, in the tick it is seen */
+  uint64_t accept_from;  /* a busy server: it accepts at this tick at the earliest */
 } fixture;
 
 static inline int fix_listen(fixture *x) {
@@ -118,7 +119,7 @@ static inline void fix_send(fixture *x, const char *data, size_t len) {
 
 /* what happens at the fake host's tick t */
 static inline void fix_tick(fixture *x, uint64_t t) {
-  if (x->conn_fd < 0) {
+  if (x->conn_fd < 0 && t >= x->accept_from) {
     x->conn_fd = accept4(x->listen_fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
   }
   const size_t seen = x->n_got;

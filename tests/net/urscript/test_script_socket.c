@@ -360,6 +360,25 @@ static void test_socket__open_takes_a_cycle_even_on_loopback(void **state) {
   assert_msg(1, "True", 1);
 }
 
+// A server on this machine that accepts late (a descheduled thread): socket_open ends when
+// it has accepted, so that a program's next step (URCL's: open the reverse socket, which makes
+// URCL send a point to this one) finds it accepted; at most 0.1 s (50 ticks) later.
+static void test_socket__open_on_loopback_ends_when_the_server_has_accepted(void **state) {
+  X.accept_from = 20;
+  must_run("textmsg(socket_open(\"127.0.0.1\", %d, \"a\"))\n");
+  assert_msg(0, "True", 20);
+  assert_int_equal(T->accept_waits, 1);
+  assert_int_equal(T->accept_wait_max, 19);
+}
+
+static void test_socket__open_waits_for_an_accept_at_most_a_tenth_of_a_second(void **state) {
+  X.accept_from = 1000;
+  must_run("textmsg(socket_open(\"127.0.0.1\", %d, \"a\"))\n"
+           "textmsg(socket_send_int(7, \"a\"))\n");
+  assert_msg(0, "True", 51);  // connected at tick 1, then 50 ticks
+  assert_msg(1, "True", 51);  // open all along: the kernel took the connection
+}
+
 static void test_socket__open_refused_port_is_false(void **state) {
   char text[256];
   snprintf(text, sizeof text, "textmsg(socket_open(\"127.0.0.1\", %d, \"r\", 0.1))\n",
@@ -546,6 +565,8 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_socket__get_var_round_trip, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__sends_have_nodelay, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__open_takes_a_cycle_even_on_loopback, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__open_on_loopback_ends_when_the_server_has_accepted, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_socket__open_waits_for_an_accept_at_most_a_tenth_of_a_second, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__open_refused_port_is_false, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__open_non_loopback_host_is_a_runtime_error, setup, teardown),
       cmocka_unit_test_setup_teardown(test_socket__reopen_and_close, setup, teardown),

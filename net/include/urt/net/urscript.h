@@ -154,6 +154,9 @@ typedef struct urt_runner_tick_stats {
   double start_p50, start_max;
   uint64_t starts;
   double compile_p50, compile_max;  /* of that, the compile [s] */
+  /* socket_opens that waited for a server on this machine to accept the connection
+   * (script_builtins_socket.c, wait_accepted), and the most ticks one waited */
+  uint64_t accept_waits, accept_wait_max;
 } urt_runner_tick_stats_t;
 void urt_runner_tick_stats(const urt_runner_t *r, urt_runner_tick_stats_t *out);
 
