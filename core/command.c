@@ -69,7 +69,7 @@ void urt_pstop_reset(const urt_model_t *m, urt_data_t *d) {
 const char *urt_pstop_text(uint32_t bits, char *buf, size_t n) {
   static const char *const names[] = {"non-finite command", "position limit", "speed limit",
                                       "acceleration limit", "torque limit",
-                                      "non-finite state"};
+                                      "non-finite state", "encoder disagreement"};
   size_t used = 0;
   if (n == 0) {
     return buf;

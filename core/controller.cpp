@@ -309,6 +309,9 @@ int urt_ctrl_init(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, doub
   for (int j = 0; j < URT_NJ; j++) {
     c->temperature[j] = m->thermal[j].t_amb;
   }
+  // the encoders' disagreement now (the gear's deflection at rest) is the first reference
+  c->enc_joint = -1;
+  tick_encoder_check(m, c, d, false);
   return URT_OK;
 }
 
@@ -387,6 +390,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       if (c->safety_mode == URT_SAFETY_MODE_PROTECTIVE_STOP || d->pstop) {
         urt_pstop_reset(m, d);
         c->safety_mode = URT_SAFETY_MODE_NORMAL;
+        c->enc_joint = -1;
         hold_at(c, measured_q(d));
         model_torque(m, c, d->live.payload, c->q1, c->qd1, c->qdd1, c->tau_model1);
         std::memcpy(c->tau_model0, c->tau_model1, sizeof c->tau_model0);
@@ -574,6 +578,12 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
   // the physics stopped: follow it
   if (d->pstop && c->safety_mode != URT_SAFETY_MODE_PROTECTIVE_STOP) {
     protective_stop(c, d, URT_CTRL_FAULT_PSTOP, 0);
+  }
+  // a joint's two encoders disagree: stop the arm before the loop carries it further
+  const int enc = tick_encoder_check(m, c, d, running(c) && !d->pstop);
+  if (enc >= 0) {
+    c->enc_joint = enc;
+    protective_stop(c, d, URT_CTRL_FAULT_ENCODER, URT_PSTOP_ENCODER);
   }
   if (!running(c)) {
     c->torque_mask = c->torque_mask_last = 0;

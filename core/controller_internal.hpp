@@ -79,6 +79,15 @@ double clamp_torque(const urt_model_t* m, int j, double tau) noexcept;
 // copper loss of the motor current in d (exact for a loss constant over the period).
 void tick_thermal(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d) noexcept;
 
+// ---- the motor/joint encoder check (controller_encoders.cpp) ----
+
+// Compare each joint's motor encoder (over the gear ratio) with its joint encoder: the first
+// joint whose disagreement has moved beyond URT_ENCODER_TOLERANCE while the arm runs (run),
+// or −1. While it does not run, the disagreement is re-taken as the reference. Once per
+// period, before the motions; the caller stops the arm. Context: RT.
+int tick_encoder_check(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d,
+                       bool run) noexcept;
+
 // ---- small helpers ----
 
 // six doubles as a vector and back

@@ -35,13 +35,11 @@ void drive_rhs(const urt_model_t* m, int j, const double* x, const JointInput& i
   if (in.i_offset != 0.0) {
     i_fb += in.i_offset;
   }
-  double qdm_fb = ss.w + in.eps_w;
+  double qdm_fb = motor_speed_reading(ss.w, in.eps_w, fj);
   double q_fb = joint_q_reading(ss.p, in.eps_q, fj);
   if (fj) {
     // sensor faults: the measurement chain's gain, offset, bias, noise, or a stuck value
     i_fb = fj->i_gain * (ss.i_f + in.eps_i) + in.i_offset + fj->i_bias;
-    qdm_fb = fj->qdm_stuck ? fj->qdm_hold
-                           : qdm_fb + fj->qdm_bias + fj->qdm_noise - fj->qdm_missed;
   }
 
   // controller: natural saturations, or forced ones for the tables

@@ -65,6 +65,16 @@ inline double joint_q_reading(double p, double eps_q, const urt_fault_joint_t* f
   return q_fb;
 }
 
+// The motor encoder's speed reading: its filter's output w plus the held error eps_w, through a
+// sensor fault when the joint has one (a stuck value, a bias, noise, lost counts). Context: RT.
+inline double motor_speed_reading(double w, double eps_w, const urt_fault_joint_t* fj) noexcept {
+  double qdm_fb = w + eps_w;
+  if (fj) {
+    qdm_fb = fj->qdm_stuck ? fj->qdm_hold : qdm_fb + fj->qdm_bias + fj->qdm_noise - fj->qdm_missed;
+  }
+  return qdm_fb;
+}
+
 // Rates of the 18 drive-block states (rows 0..17 of f). With forced = kNatural the saturations
 // follow the state; otherwise they are forced to `forced` (the set-point's sign decides the
 // saturated value). Rows 18..20 (q, q̇, z) are left untouched. Context: RT.

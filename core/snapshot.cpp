@@ -265,6 +265,7 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   }
   s->pstop = d->pstop;
   s->ctrl_fault = c->fault;
+  s->enc_joint = c->enc_joint;
   s->speed_slider = c->speed_slider;
   // the slider's and the pause's scaling, and the trajectory limiter's while a speedj needs it
   s->motion_rate = c->speed_scaling * c->pause_scale;

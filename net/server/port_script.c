@@ -145,9 +145,14 @@ bool urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
   if (mode == URT_SAFETY_MODE_PROTECTIVE_STOP) {
     // the controller log names what stopped the arm (the physics' causes, the controller's
     // refusal bits), which the primary interface's messages do not carry
-    char bits[128];
-    snprintf(cause, sizeof cause, " (%s; controller fault 0x%x)",
-             urt_pstop_text(s->pstop, bits, sizeof bits), (unsigned)s->ctrl_fault);
+    char bits[128], joint[48] = "";
+    if ((s->pstop & URT_PSTOP_ENCODER) && s->enc_joint >= 0 && s->enc_joint < 6) {
+      static const char *const kJoint[] = {"Base", "Shoulder", "Elbow", "Wrist 1", "Wrist 2",
+                                           "Wrist 3"};
+      snprintf(joint, sizeof joint, " of the %s joint", kJoint[s->enc_joint]);
+    }
+    snprintf(cause, sizeof cause, " (%s%s; controller fault 0x%x)",
+             urt_pstop_text(s->pstop, bits, sizeof bits), joint, (unsigned)s->ctrl_fault);
   }
   snprintf(line, sizeof line, "safety mode %s%s",
            mode >= 1 && mode <= 9 ? kMode[mode] : "(unknown)", cause);

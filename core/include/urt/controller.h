@@ -195,12 +195,20 @@ enum {
   URT_CTRL_FAULT_BAD_ARGUMENT = 1u << 3,   /* a, v, t, gain… outside the allowed range   */
   URT_CTRL_FAULT_PSTOP = 1u << 4,          /* the physics entered a protective stop      */
   URT_CTRL_FAULT_SCRIPT_PSTOP = 1u << 5,   /* a program asked for it (protective_stop())  */
-  URT_CTRL_FAULT_JUMP = 1u << 6            /* an external set-point (DIRECT) further from the
+  URT_CTRL_FAULT_JUMP = 1u << 6,           /* an external set-point (DIRECT) further from the
                                               set-point than its joint moves in one period at
                                               qd_max → pstop (C204A0 on 30001)            */
+  URT_CTRL_FAULT_ENCODER = 1u << 7         /* a joint's motor and joint encoders disagree by
+                                              more than URT_ENCODER_TOLERANCE → pstop    */
 };
 
 #define URT_SERVOJ_REPLAY 32  /* periods a late servoj can be run from its issuing tick */
+/* [rad] how far a joint's motor encoder (over the gear ratio) and joint encoder may disagree,
+ * beyond where they stood when the arm last was not running, before the controller stops the
+ * arm (core/controller_encoders.cpp). [P]: UR documents the check, not its threshold. Above the
+ * largest the model's joints show without a sensor fault: 0.04 rad, the shoulder with its gear
+ * stiffness at the catalogue's 4 % under the excitation trajectory (healthy: 8e-4). */
+#define URT_ENCODER_TOLERANCE 0.05
 
 typedef struct urt_ctrl {
   double period;              /* controller period [s] (0.002 or 0.008)          */
@@ -286,6 +294,13 @@ typedef struct urt_ctrl {
    * program's thread runs late (descheduled) and its next command is still to come
    * (core/motion_speedj.cpp). */
   uint64_t program_slice;
+
+  /* the motor/joint encoder check (core/controller_encoders.cpp): per joint, the motor-side
+   * angle error the motor encoder's faults have accumulated [rad, motor side], the
+   * disagreement (motor side / ratio − joint encoder) when the arm last was not running
+   * [rad], and the joint whose check stopped the arm (−1: none) */
+  double enc_motor_err[URT_NJ], enc_anchor[URT_NJ];
+  int32_t enc_joint;
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or

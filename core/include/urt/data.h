@@ -48,7 +48,9 @@ enum {
   URT_PSTOP_SPEED_LIMIT = 1u << 2,     /* speed set-point above qd_max    */
   URT_PSTOP_ACC_LIMIT = 1u << 3,       /* acceleration above qdd_max      */
   URT_PSTOP_TORQUE_LIMIT = 1u << 4,    /* torque feed-forward too large   */
-  URT_PSTOP_NONFINITE_STATE = 1u << 5  /* the integrator produced NaN/Inf or an implausible state */
+  URT_PSTOP_NONFINITE_STATE = 1u << 5, /* the integrator produced NaN/Inf or an implausible state */
+  URT_PSTOP_ENCODER = 1u << 6          /* a joint's motor and joint encoders disagree (the
+                                        * controller's check, core/controller_encoders.cpp) */
 };
 
 /* One joint command, valid from the current step on. Within a step the set-point follows

@@ -93,6 +93,7 @@ typedef struct urt_snapshot {
   /* fault ground truth at the tick (urt_faults_truth; LCM URTWIN_FAULT_TRUTH) */
   urt_fault_truth_t fault_truth;
   uint32_t faults_applied, faults_refused;  /* live fault commands (URT_CTRL_FAULT)   */
+  int32_t enc_joint;          /* the joint whose encoders disagreed (URT_PSTOP_ENCODER), −1 */
 } urt_snapshot_t;
 
 /* Fill a snapshot from the physics and the controller (calls urt_data_update_outputs).
