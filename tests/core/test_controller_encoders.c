@@ -9,29 +9,20 @@
 #include <string.h>
 
 #include "controller_harness.h"
+#include "fault_spec.h"
 #include "test_support.h"
-#include "urt/faults.h"
 
 static const char *const kQuiet[] = {"sensors.noise=false", NULL};
 
 static urt_fault_spec_t spec(int cls, int joint, int component, double severity, double onset) {
-  urt_fault_spec_t f;
-  memset(&f, 0, sizeof f);
-  f.cls = cls;
-  f.joint = joint;
+  urt_fault_spec_t f = fault_spec(cls, joint, severity);
   f.component = component;
-  f.severity = severity;
-  f.profile = URT_FAULT_STEP;
   f.onset = onset;
   return f;
 }
 
 static void install(rig_t *r, const urt_fault_spec_t *f) {
-  urt_fault_scenario_t s;
-  memset(&s, 0, sizeof s);
-  s.n = f ? 1 : 0;
-  if (f) s.f[0] = *f;
-  assert_int_equal(urt_data_set_faults(r->m, r->d, &s), URT_OK);
+  fault_install(r->m, r->d, f, f ? 1 : 0);
 }
 
 static urt_ctrl_cmd_t movej_to(rig_t *r, const double q[6], double a, double v) {

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fault_spec.h"
 #include "test_model.h"
 #include "test_support.h"
 
@@ -19,21 +20,11 @@ static urt_data_t *new_data(const urt_model_t *m) {
 }
 
 static urt_fault_spec_t spec(int cls, int joint, double severity) {
-  urt_fault_spec_t f;
-  memset(&f, 0, sizeof f);
-  f.cls = cls;
-  f.joint = joint;
-  f.severity = severity;
-  f.profile = URT_FAULT_STEP;
-  return f;
+  return fault_spec(cls, joint, severity);
 }
 
 static void install(const urt_model_t *m, urt_data_t *d, const urt_fault_spec_t *f, int n) {
-  urt_fault_scenario_t s;
-  memset(&s, 0, sizeof s);
-  s.n = n;
-  memcpy(s.f, f, (size_t)n * sizeof *f);
-  assert_int_equal(urt_data_set_faults(m, d, &s), URT_OK);
+  fault_install(m, d, f, n);
 }
 
 static void run(const urt_model_t *m, urt_data_t *d, double seconds) {
