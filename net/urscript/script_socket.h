@@ -92,7 +92,8 @@ int urt__us_sock_poll_connect(us_sock *s);
 /* How many connections the listener this open socket dialled holds that it has not accepted
  * yet (its accept queue, the rx_queue of its LISTEN line in /proc/self/net/tcp or tcp6), when
  * that listener is on this machine; -1 when it is not, or the kernel does not say. Reads a
- * /proc file: socket_open's end only, never per tick. */
+ * /proc file (a system call, no wait): only at the end of a socket_open, once per tick while it
+ * waits for the accept (at most 0.1 s, b_socket_open), on the runner thread, never the physics'. */
 int urt__us_sock_peer_backlog(const us_sock *s);
 
 /* Push out a queued rest of a write and, once per controller tick, move what the kernel holds
