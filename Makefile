@@ -119,6 +119,16 @@ test-python: build
 URCL_DIR := shared/clients/Universal_Robots_Client_Library-2.14.0
 URCL_SRC ?= $(or $(wildcard $(abspath ../$(URCL_DIR))),$(wildcard $(abspath ../../$(URCL_DIR))),$(abspath ../$(URCL_DIR)))
 URCL_BUILD := build/urcl/build
+# -ftrivial-auto-var-init=zero: URCL 2.14.0's fake RTDE server (tests/fake_rtde_server.cpp) passes
+# an uninitialised `size_t written` to TCPServer::writeUnchecked, which sends from buf + written:
+# with GCC 12 -O2 the stale stack value of the previous reply (4) cut the first 4 bytes off the
+# urcontrol-version answer (seen with strace), and its four RTDEClientTest fake-server tests fail
+# "No answer to urcontrol version query". Upstream's later fake server has `written = 0`; the flag
+# gives URCL's uninitialised locals that value without touching its code. The stamp holds this
+# configuration, so a change of it rebuilds.
+URCL_CONFIG := -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS=-ftrivial-auto-var-init=zero \
+  -DBUILDING_TESTS=ON -DINTEGRATION_TESTS=ON -DPRIMARY_CLIENT_STRICT_PARSING_=ON \
+  -DFETCHCONTENT_SOURCE_DIR_GOOGLETEST=/usr/src/googletest -DFETCHCONTENT_FULLY_DISCONNECTED=ON
 URCL_TESTS := rtde_tests dashboard_client_g5_tests primary_client_test_headless \
   ur_driver_tests_headless ur_driver_tests_urcap external_control_program_tests_headless \
   external_control_program_tests_urcap spline_tests_headless spline_tests_urcap \
@@ -133,15 +143,12 @@ URCL_EXAMPLES := driver_example primary_pipeline_example send_script \
 
 urcl: deps
 	@if [ ! -d "$(URCL_SRC)" ]; then echo "SKIPPED: $(URCL_SRC) absent (../shared): URCL not built"; \
-	elif [ -f build/urcl/.stamp ]; then echo "URCL: built (build/urcl/.stamp)"; else \
-	  t0=$$(date +%s); \
-	  cmake -S "$(URCL_SRC)" -B $(URCL_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	    -DBUILDING_TESTS=ON -DINTEGRATION_TESTS=ON -DPRIMARY_CLIENT_STRICT_PARSING_=ON \
-	    -DFETCHCONTENT_SOURCE_DIR_GOOGLETEST=/usr/src/googletest \
-	    -DFETCHCONTENT_FULLY_DISCONNECTED=ON >/dev/null && \
+	elif [ "$$(cat build/urcl/.stamp 2>/dev/null)" = "$(URCL_CONFIG)" ]; then echo "URCL: built (build/urcl/.stamp)"; else \
+	  t0=$$(date +%s); rm -f build/urcl/.stamp; \
+	  cmake -S "$(URCL_SRC)" -B $(URCL_BUILD) $(URCL_CONFIG) >/dev/null && \
 	  cmake --build $(URCL_BUILD) -j $(JOBS) --target $(URCL_TESTS) $(URCL_EXAMPLES) >build/urcl/build.log 2>&1 \
 	    || { tail -40 build/urcl/build.log; exit 1; }; \
-	  touch build/urcl/.stamp; echo "URCL: built in $$(( $$(date +%s) - t0 )) s"; \
+	  echo "$(URCL_CONFIG)" > build/urcl/.stamp; echo "URCL: built in $$(( $$(date +%s) - t0 )) s"; \
 	fi
 	@if [ -f build/urcl/.stamp ]; then $(MAKE) --no-print-directory $(URCL_OURS); fi
 
