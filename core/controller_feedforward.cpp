@@ -43,6 +43,19 @@ double friction_ff(const urt_model_t* m, int j, double qd) noexcept {
   return urt_friction_g(&m->friction[j], qd) * std::tanh(qd / kFrictionVEps);
 }
 
+double friction_ff_scaled(const urt_model_t* m, int j, double qd, double viscous,
+                          double coulomb) noexcept {
+  if (!m->friction[j].enabled || (viscous == 0.0 && coulomb == 0.0)) {
+    return 0.0;
+  }
+  if (viscous == 1.0 && coulomb == 1.0) {
+    return friction_ff(m, j, qd);  // the same bits as the whole model's feed-forward
+  }
+  const urt_friction_params_t& p = m->friction[j];
+  const double g = urt_friction_g(&p, qd), visc = p.f_v * std::cbrt(qd * qd);
+  return (coulomb * (g - visc) + viscous * visc) * std::tanh(qd / kFrictionVEps);
+}
+
 // the model feed-forward at a set-point
 void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const urt_payload_t& load,
                   const double* q, const double* qd, const double* qdd, double* tau) noexcept {

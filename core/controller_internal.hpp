@@ -66,6 +66,11 @@ void ctrl_rnea(const urt_model_t* m, const urt_ctrl_t* c, const urt_payload_t& l
 // small speed [N m].
 double friction_ff(const urt_model_t* m, int j, double qd) noexcept;
 
+// The same with its viscous part (f_v |q̇|^{2/3}) scaled by viscous and the rest (Coulomb and
+// Stribeck) by coulomb: direct_torque's friction compensation [N m]. Scales 1, 1: friction_ff.
+double friction_ff_scaled(const urt_model_t* m, int j, double qd, double viscous,
+                          double coulomb) noexcept;
+
 // The model feed-forward at a set-point q, qd, qdd: τ = RNEA + friction − c->tau_bias [N m].
 void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const urt_payload_t& load,
                   const double* q, const double* qd, const double* qdd, double* tau) noexcept;

@@ -1,8 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
-// core/motion_torque.cpp — direct torque (directTorque): every drive in torque mode makes the
-// commanded joint torque (index 1: plus the friction model at the actual speed); the set-point
-// follows the arm. With no new TORQUE for 4 periods the drives return to position control,
-// decelerate at 4 rad/s² and hold. Context: RT.
+// core/motion_torque.cpp — direct torque (direct_torque, directTorque): every drive in torque
+// mode makes the commanded joint torque plus the controller's gravity g(q) (UR: "The function
+// always compensates for gravity, meaning that the provided target torque should not include
+// gravity compensation"; script manual 5.25.1) plus the friction model at the actual speed in
+// the shares the command asks (index 1: all of it, friction_comp=True; index 2: the viscous and
+// the Coulomb part scaled per joint, viscous_scale/coulomb_scale); the set-point follows the
+// arm. With no new TORQUE for 4 periods the drives return to position control, decelerate at
+// 4 rad/s² and hold. Context: RT.
 #include "motion.hpp"
 
 namespace urt::core {
@@ -15,10 +19,25 @@ uint32_t bad_target(const urt_model_t* m, const urt_ctrl_cmd_t& cmd) {
   return torque_faults(m, cmd.tau);
 }
 
+// the friction shares: index 0..2, and with 2 every scale in [0, 1] (UR's range)
+bool bad_argument(const urt_ctrl_cmd_t& cmd) {
+  if (cmd.index < 0 || cmd.index > 2) {
+    return true;
+  }
+  bool bad = false;
+  for (int j = 0; cmd.index == 2 && j < URT_NJ; j++) {
+    bad = bad || !(cmd.q[j] >= 0.0 && cmd.q[j] <= 1.0) || !(cmd.qd[j] >= 0.0 && cmd.qd[j] <= 1.0);
+  }
+  return bad;
+}
+
 void start(const MotionEnv& e, const urt_ctrl_cmd_t& cmd, const MotionStart&) {
   urt_torque_state_t& tp = e.c->motion_state.torque;
   std::memcpy(tp.tau, cmd.tau, sizeof tp.tau);
-  tp.friction = cmd.index == 1 ? 1.0 : 0.0;
+  for (int j = 0; j < URT_NJ; j++) {
+    tp.viscous[j] = cmd.index == 2 ? cmd.q[j] : (cmd.index == 1 ? 1.0 : 0.0);
+    tp.coulomb[j] = cmd.index == 2 ? cmd.qd[j] : (cmd.index == 1 ? 1.0 : 0.0);
+  }
   tp.since = 0.0;
   e.c->motion = URT_MOTION_TORQUE;
 }
@@ -36,9 +55,11 @@ uint32_t tick(const MotionEnv& e) {
     return 0;
   }
   c->torque_mask = kAllJoints;
+  Vec6 g;
+  ctrl_rnea(m, c, e.d->live.payload, actual_q(e.d), Vec6::Zero(), Vec6::Zero(), g);
   for (int j = 0; j < URT_NJ; j++) {
-    double f = tp.friction != 0.0 ? friction_ff(m, j, e.d->x[j][URT_X_QD]) : 0.0;
-    c->tau_ff[j] = clamp_torque(m, j, tp.tau[j] + f);
+    const double f = friction_ff_scaled(m, j, e.d->x[j][URT_X_QD], tp.viscous[j], tp.coulomb[j]);
+    c->tau_ff[j] = clamp_torque(m, j, tp.tau[j] + g[j] + f);
   }
   mark_done(c, c->motion_id);
   return 0;
@@ -46,7 +67,7 @@ uint32_t tick(const MotionEnv& e) {
 
 }  // namespace
 
-const Motion kTorqueMotion = {URT_MOTION_TORQUE, false, true,         true,   no_bad_argument,
+const Motion kTorqueMotion = {URT_MOTION_TORQUE, false, true,         true,   bad_argument,
                               bad_target,        start, tick, stop_to_rest, nullptr};
 
 // torque-controlled joints: the set-point follows the arm (q, q̇ at the tick, q̈ their change),

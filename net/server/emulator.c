@@ -483,7 +483,9 @@ int urt_emulator_create(urt_loop_t *loop, const urt_emulator_config_t *cfg, urt_
   // the script thread shares the I/O thread's priority: both feed the physics thread's rings
   urt_runner_config_t rcfg = {.rt_priority = e->cfg.rt_priority,
                               .allow_hosts = e->cfg.script_allow_hosts,
-                              .n_allow_hosts = e->cfg.n_script_allow_hosts};
+                              .n_allow_hosts = e->cfg.n_script_allow_hosts,
+                              .version = {e->cfg.version.major, e->cfg.version.minor,
+                                          e->cfg.version.bugfix}};
   if (urt_runner_create(&host, &rcfg, &e->runner) != 0) {
     snprintf(err, err_sz, "cannot start the URScript runner");
     urt_emulator_destroy(e);

@@ -129,7 +129,8 @@ static void run_sec(urt_runner_t *r, const unit *u) {
     return;
   }
   us_hooks h = {.host = &r->host, .motion_id = &r->motion_id, .step_budget = r->cfg.step_budget,
-                .wait_timeout_ms = r->cfg.wait_timeout_ms};
+                .wait_timeout_ms = r->cfg.wait_timeout_ms,
+                .version = {r->cfg.version[0], r->cfg.version[1], r->cfg.version[2]}};
   // a sec unit's program must not block: mark it secondary whatever its first keyword
   p->secondary = true;
   if (urt__us_run(p, &h, &e) != 0) {
@@ -207,7 +208,8 @@ static void run_main(urt_runner_t *r, const unit *u) {
                 .step_budget = r->cfg.step_budget, .wait_timeout_ms = r->cfg.wait_timeout_ms,
                 .poll = poll_main, .poll_ctx = r, .tick_cpu = &r->tick_cpu,
                 .late_slices = &r->late_slices, .late_max = &r->late_max,
-                .preempted = &r->preempted};
+                .preempted = &r->preempted,
+                .version = {r->cfg.version[0], r->cfg.version[1], r->cfg.version[2]}};
   p->secondary = false;
   if (urt__us_run(p, &h, &e) != 0) {
     report(r, &e, false);

@@ -131,6 +131,7 @@ typedef struct us_hooks {
   uint64_t *motion_id;     /* last motion id used by this runner (incremented per motion) */
   int64_t step_budget;     /* steps between ticks */
   int wait_timeout_ms;
+  int version[3];          /* the controller's major, minor, bugfix; all 0: the newest */
   /* called after every wait_tick: nonzero cancels the program (US_ERR_CANCEL). Nullable. */
   int (*poll)(void *ctx);
   void *poll_ctx;

@@ -100,12 +100,53 @@ static int b_servoc(vm *V, const us_node *n, sv *a, sv *out) {
   return urt__us_wait_for(V, n, urt__us_snap(V)->period, true, "servoc");  // one control cycle
 }
 
+/* the controller's version against major.minor.bugfix (all 0: the newest, so at least) */
+static bool version_at_least(const vm *V, int major, int minor, int bugfix) {
+  const int *v = V->h->version;
+  if (v[0] == 0 && v[1] == 0 && v[2] == 0) return true;
+  if (v[0] != major) return v[0] > major;
+  if (v[1] != minor) return v[1] > minor;
+  return v[2] >= bugfix;
+}
+
+/* direct_torque(torque, friction_comp, viscous_scale, coulomb_scale): the joint torques besides
+ * gravity, which the controller adds (core/motion_torque.cpp). As UR's releases have it: none
+ * before 5.23 (CB3 has none); 5.23 to 5.25.0 take friction_comp (default True: the whole
+ * friction model); from 5.25.1 viscous_scale and coulomb_scale, each six shares in [0, 1] of the
+ * model's viscous and Coulomb parts, default [0.9, 0.9, 0.8, 0.9, 0.9, 0.9] and
+ * [0.8, 0.8, 0.7, 0.8, 0.8, 0.8] (script manual 5.25.1), with friction_comp still taken but
+ * ignored once a scale is given. */
 static int b_direct_torque(vm *V, const us_node *n, sv *a, sv *out) {
+  static const double kViscous[URT_NJ] = {0.9, 0.9, 0.8, 0.9, 0.9, 0.9};
+  static const double kCoulomb[URT_NJ] = {0.8, 0.8, 0.7, 0.8, 0.8, 0.8};
+  const int *ver = V->h->version;
+  if (!version_at_least(V, 5, 23, 0)) {
+    return urt__us_fail(V, n, "direct_torque is not available on software %d.%d.%d (UR added it in 5.23)",
+                        ver[0], ver[1], ver[2]);
+  }
+  const bool scales = version_at_least(V, 5, 25, 1);
+  if (!scales && (a[2].t != V_NONE || a[3].t != V_NONE)) {
+    return urt__us_fail(V, n, "direct_torque: viscous_scale and coulomb_scale need software 5.25.1 (this is %d.%d.%d)",
+                        ver[0], ver[1], ver[2]);
+  }
   urt_ctrl_cmd_t c = {.kind = URT_CTRL_TORQUE};
-  bool friction = true;
   if (urt__us_arg_vec6(V, n, a, 0, c.tau, NULL) != X_OK) return X_ERR;
-  if (a[1].t != V_NONE && urt__us_arg_bool(V, n, a, 1, &friction) != X_OK) return X_ERR;
-  c.index = friction ? 1 : 0;
+  if (scales && (a[2].t != V_NONE || a[3].t != V_NONE || a[1].t == V_NONE)) {
+    c.index = 2;
+    memcpy(c.q, kViscous, sizeof c.q);
+    memcpy(c.qd, kCoulomb, sizeof c.qd);
+    if (a[2].t != V_NONE && urt__us_arg_vec6(V, n, a, 2, c.q, NULL) != X_OK) return X_ERR;
+    if (a[3].t != V_NONE && urt__us_arg_vec6(V, n, a, 3, c.qd, NULL) != X_OK) return X_ERR;
+    for (int j = 0; j < URT_NJ; j++) {
+      if (!(c.q[j] >= 0.0 && c.q[j] <= 1.0) || !(c.qd[j] >= 0.0 && c.qd[j] <= 1.0)) {
+        return urt__us_fail(V, n, "direct_torque: viscous_scale and coulomb_scale must lie in [0, 1] (joint %d)", j);
+      }
+    }
+  } else {
+    bool friction = true;
+    if (a[1].t != V_NONE && urt__us_arg_bool(V, n, a, 1, &friction) != X_OK) return X_ERR;
+    c.index = friction ? 1 : 0;
+  }
   if (urt__us_motion(V, n, "direct_torque", &c, false) != X_OK) return X_ERR;
   return urt__us_wait_for(V, n, urt__us_snap(V)->period, true, "direct_torque");
 }
@@ -179,7 +220,7 @@ const us_builtin urt__us_builtins_modes[] = {
     {"teach_mode", b_teach_mode, 0, P(NULL)},
     {"end_teach_mode", b_end_freedrive_mode, 0, P(NULL)},
     {"servoc", b_servoc, 1, P("pose", "a", "v", "r")},
-    {"direct_torque", b_direct_torque, 1, P("torque", "friction_comp")},
+    {"direct_torque", b_direct_torque, 1, P("torque", "friction_comp", "viscous_scale", "coulomb_scale")},
     {"set_gravity", b_set_gravity, 1, P("d")},
     {"protective_stop", b_protective_stop, 0, P(NULL)},
     {"set_target_payload", b_set_target_payload, 2, P("m", "cog", "inertia", "transition_time")},

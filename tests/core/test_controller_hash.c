@@ -116,7 +116,7 @@ static const recorded_t kRecorded[] = {
     {"gcc-O+fma",
      {0xb4ab92369250a360ull, 0x664f9fea2e8115c1ull, 0xb00a57f6655ccc3bull,
       0xcfdda02b9fe32fcdull, 0x323f3babfc76bb4dull, 0x0b06ff57800c551dull,
-      0xd02c00a0608f2fd6ull, 0x7001fa98b2e8d1a5ull, 0x9207c3add24fbdb6ull,
+      0xf12d8777641aaeb2ull, 0x7001fa98b2e8d1a5ull, 0x9207c3add24fbdb6ull,
       0xd21ce64f0de072aeull, 0xc5dc97668d1219e2ull, 0x1b683c9b9087c81full,
       0x922aab3a7fd14d39ull}},
 };
@@ -508,11 +508,14 @@ static void sc_torque(rig_t *r) {
   go_work(r);
   urt_ctrl_cmd_t t = rig_cmd(r, URT_CTRL_TORQUE);
   for (int k = 0; k < 250; k++) {
+    // the controller adds gravity: the commanded torque is what acts besides it
     for (int j = 0; j < URT_NJ; j++) {
-      t.tau[j] = r->c->tau_model1[j] + r->c->tau_bias[j];
+      t.tau[j] = 0.0;
+      t.q[j] = 0.5;    // index 2: the friction model's viscous part at half
+      t.qd[j] = 0.25;  // and its Coulomb part at a quarter
     }
-    t.tau[0] += 2.0 * sin(2.0 * M_PI * 2.0 * k * r->c->period);
-    t.index = k > 120 ? 1 : 0;
+    t.tau[0] = 2.0 * sin(2.0 * M_PI * 2.0 * k * r->c->period);
+    t.index = k > 180 ? 2 : (k > 120 ? 1 : 0);
     period(r, &t);
   }
   run(r, 0.5);  // the stream stopped: position control, stop, hold

@@ -306,23 +306,26 @@ static void test_set_inputs__masked_levels_shown_and_bad_commands_refused_whole(
 
 //---- direct torque ----
 
-/* stream directTorque with the model's gravity at the measured position for t seconds; returns
- * the largest joint drift from the start */
-static double stream_gravity_torque(rig_t *r, double t, const double *extra, int index) {
+/* stream directTorque for t seconds: extra (nullable) besides gravity, which the controller adds
+ * itself (UR: the target torque "should not include gravity compensation"); index 2 scales the
+ * friction model's viscous and Coulomb parts by visc and coul. Returns the largest joint drift
+ * from the start. */
+static double stream_torque(rig_t *r, double t, const double *extra, int index, double visc,
+                            double coul) {
   double q0[URT_NJ], q[URT_NJ], drift = 0.0;
   q_actual(r, q0);
   int n = (int)lround(t / r->c->period);
   uint64_t id = r->next_id++;
   for (int i = 0; i < n; i++) {
-    urt_snapshot_t s = snap(r);  // the controller reads what the robot measures
     urt_ctrl_cmd_t c;
     memset(&c, 0, sizeof c);
     c.kind = URT_CTRL_TORQUE;
     c.id = id;
     c.index = index;
-    urt_arm_gravity(r->m, s.q, c.tau);
-    for (int j = 0; j < URT_NJ && extra; j++) {
-      c.tau[j] += extra[j];
+    for (int j = 0; j < URT_NJ; j++) {
+      c.tau[j] = extra ? extra[j] : 0.0;
+      c.q[j] = visc;
+      c.qd[j] = coul;
     }
     rig_period(r, &c);
     q_actual(r, q);
@@ -331,14 +334,16 @@ static double stream_gravity_torque(rig_t *r, double t, const double *extra, int
   return drift;
 }
 
-static void test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it(void **state) {
+static void test_torque__zero_torque_holds_the_arm_against_gravity_then_a_torque_moves_it(
+    void **state) {
   (void)state;
   rig_t r = rig_new(NULL, 0.002, 1);
   go_to_work_pose(&r);
   const double t_hold = kHoldTime;
-  double drift = stream_gravity_torque(&r, t_hold, NULL, 0);
+  // without the controller's gravity the shoulder (about 50 N m here) would fall at once
+  double drift = stream_torque(&r, t_hold, NULL, 0, 0.0, 0.0);
   urt_snapshot_t s = snap(&r);
-  print_message("directTorque = g(q) for %.1f s: max joint drift %.2e rad; control_mode %d, "
+  print_message("directTorque = 0 for %.1f s: max joint drift %.2e rad; control_mode %d, "
                 "torque mask %#x\n", t_hold, drift, s.control_mode, r.c->torque_mask);
   assert_int_equal(r.d->pstop, 0);
   assert_int_equal(r.c->motion, URT_MOTION_TORQUE);
@@ -346,11 +351,11 @@ static void test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it(voi
   assert_int_equal(s.control_mode, 3);
   assert_true(drift < 1e-3);
 
-  // a torque on top of gravity acts through the drives: 5 N m on wrist 3 beats its friction
+  // a torque besides gravity acts through the drives: 5 N m on wrist 3 beats its friction
   double q0[URT_NJ], q1[URT_NJ];
   q_actual(&r, q0);
   const double extra[URT_NJ] = {0, 0, 0, 0, 0, 5.0};
-  stream_gravity_torque(&r, 0.05, extra, 1);
+  stream_torque(&r, 0.05, extra, 1, 0.0, 0.0);
   q_actual(&r, q1);
   double others = 0.0;
   for (int j = 0; j < 5; j++) {
@@ -360,6 +365,31 @@ static void test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it(voi
                 q1[5] - q0[5], others);
   assert_true(q1[5] - q0[5] > 1e-2);
   assert_true(others < 1e-3);
+
+  // friction scales (index 2): the drive's torque is the command, the controller's gravity
+  // and the friction model's Coulomb part (with Stribeck's) at coul plus its viscous part
+  // f_v |q̇|^(2/3) at visc, at the speed the period starts from (faded in over 2e-3 rad/s,
+  // core/controller_feedforward.cpp)
+  const double visc = 0.5, coul = 0.25;
+  stream_torque(&r, 0.01, extra, 2, visc, coul);
+  const double qd = r.d->x[5][URT_X_QD];
+  stream_torque(&r, 0.002, extra, 2, visc, coul);
+  const urt_friction_params_t *fp = &r.m->friction[5];
+  const double g_f = urt_friction_g(fp, qd), v_part = fp->f_v * cbrt(qd * qd);
+  double grav[URT_NJ];
+  urt_arm_gravity(r.m, r.c->q1, grav);
+  const double want = 5.0 + grav[5] + (coul * (g_f - v_part) + visc * v_part) * tanh(qd / 2e-3);
+  print_message("wrist 3 at %.3f rad/s: torque feed-forward %.6f N m, expected %.6f (gravity "
+                "%.4f, friction %.4f of the whole model's %.4f)\n", qd, r.c->tau_ff[5], want,
+                grav[5], want - 5.0 - grav[5], g_f);
+  assert_true(fabs(r.c->tau_ff[5] - want) < 1e-9);
+  // out of UR's range [0, 1]: refused
+  urt_ctrl_cmd_t wrong = rig_cmd(&r, URT_CTRL_TORQUE);
+  wrong.index = 2;
+  wrong.q[3] = 1.5;
+  r.c->fault = 0;
+  rig_period(&r, &wrong);
+  assert_true(r.c->fault & URT_CTRL_FAULT_BAD_ARGUMENT);
 
   // the stream stops: after the time-out the arm is brought to rest under position control
   run_for(&r, 0.02);
@@ -688,7 +718,8 @@ static void test_modes__no_heap_allocation(void **state) {
   long before = urt_test_malloc_count();
   urt_test_malloc_arm(1);
   urt_ctrl_cmd_t t = rig_cmd(&r, URT_CTRL_TORQUE);
-  urt_arm_gravity(r.m, r.c->q1, t.tau);
+  t.index = 2;
+  t.q[5] = t.qd[5] = 0.5;
   rig_period(&r, &t);
   run_for(&r, 0.02);
   urt_ctrl_cmd_t fd = rig_cmd(&r, URT_CTRL_FREEDRIVE);
@@ -738,7 +769,7 @@ int main(void) {
       cmocka_unit_test(test_set_wrench__shows_in_tcp_force_and_bad_values_are_refused),
       cmocka_unit_test(test_set_tool_voltage__kept_shown_and_bad_values_refused),
       cmocka_unit_test(test_set_inputs__masked_levels_shown_and_bad_commands_refused_whole),
-      cmocka_unit_test(test_torque__gravity_torques_hold_the_arm_then_a_torque_moves_it),
+      cmocka_unit_test(test_torque__zero_torque_holds_the_arm_against_gravity_then_a_torque_moves_it),
       cmocka_unit_test(test_freedrive__holds_without_a_wrench_and_gives_way_to_one),
       cmocka_unit_test(test_freedrive__held_axes_resist_free_axis_gives_way),
       cmocka_unit_test(test_set_gravity__changes_the_controllers_model_not_the_world),

@@ -123,7 +123,10 @@ typedef enum urt_ctrl_cmd_kind {
                                  model only (feed-forward, freedrive), not the world's         */
   URT_CTRL_SERVOL,            /* pose[6], t, lookahead_time, gain (servoj in tool space)      */
   URT_CTRL_SERVOC,            /* pose[6], a, v, r (r treated as 0)                          */
-  URT_CTRL_TORQUE,            /* tau[6] joint torques [N m]; index 1: compensate friction    */
+  URT_CTRL_TORQUE,            /* tau[6] joint torques [N m] besides gravity (the controller
+                                 adds its g(q)); index 0: no friction compensation, 1: the
+                                 whole friction model, 2: q[6] its viscous and qd[6] its
+                                 Coulomb part scaled (0..1 each, direct_torque's scales)     */
   URT_CTRL_FREEDRIVE,         /* index 1: enter teach mode; q[6] = free axes x y z rx ry rz
                                  (1 free, 0 held) of the feature frame pose[6] (base frame;
                                  zeros: the base); index 0: end and hold where the arm is    */

@@ -54,8 +54,9 @@ typedef struct urt_servoj_state {  /* servoj, and servol on its IK */
 } urt_servoj_state_t;
 
 typedef struct urt_torque_state {
-  double tau[URT_NJ];            /* commanded joint torques [N m]                            */
-  double friction;               /* 1: add the friction model at the actual speed            */
+  double tau[URT_NJ];            /* commanded joint torques [N m], gravity not included      */
+  double viscous[URT_NJ];        /* share of the friction model's viscous part added, 0..1   */
+  double coulomb[URT_NJ];        /* share of its Coulomb (and Stribeck) part added, 0..1     */
   double since;                  /* time since the last TORQUE [s]                           */
 } urt_torque_state_t;
 

@@ -17,6 +17,7 @@ typedef struct script_run {
   urt_script_host_t host;
   uint64_t motion_id;
   us_err err;
+  int version[3];  /* the controller's software version (all 0: the newest) */
 } script_run;
 
 /* parse and run; returns urt__us_run's result (the error in r->err) */
@@ -26,7 +27,7 @@ static inline int sr_run(script_run *r, const char *text) {
     fail_msg("parse: %u:%u %s", r->err.line, r->err.column, r->err.text);
   }
   us_hooks h = {.host = &r->host, .motion_id = &r->motion_id, .step_budget = 100000,
-                .wait_timeout_ms = 1};
+                .wait_timeout_ms = 1, .version = {r->version[0], r->version[1], r->version[2]}};
   int rc = urt__us_run(p, &h, &r->err);
   urt__us_prog_free(p);
   return rc;

@@ -104,6 +104,9 @@ typedef struct urt_runner_config {
    * written in the script (--script-allow-host); at most 16, copied. Nullable when 0. */
   const char *const *allow_hosts;
   int n_allow_hosts;
+  /* The emulated controller's software version (major, minor, bugfix): builtins whose
+   * defaults changed between releases follow it (direct_torque). All 0: the newest. */
+  int version[3];
 } urt_runner_config_t;
 
 typedef struct urt_runner urt_runner_t;
