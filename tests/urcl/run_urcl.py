@@ -49,6 +49,9 @@ def run_version(args, name):
     version, series = VERSIONS[name]
     if args.netns:
         loopback_up()
+    # the robot model, as URCL's CI matrix gives it to its tests (ur5 with CB3, ur5e with
+    # e-Series): PrimaryClientTest.test_robot_type compares the robot type against it
+    os.environ["ROBOT_MODEL"] = "ur5" if series == "cb3" else "ur5e"
     work = os.path.join(args.work, name)
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(os.path.dirname(work), exist_ok=True)
