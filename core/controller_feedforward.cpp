@@ -43,6 +43,41 @@ double friction_ff(const urt_model_t* m, int j, double qd) noexcept {
   return urt_friction_g(&m->friction[j], qd) * std::tanh(qd / kFrictionVEps);
 }
 
+double feasible_accel(const urt_model_t* m, const urt_ctrl_t* c, const urt_payload_t& load,
+                      const double* q, const double* d) noexcept {
+  Vec6 g, t;
+  ctrl_rnea(m, c, load, vec6(q), Vec6::Zero(), Vec6::Zero(), g);
+  ctrl_rnea(m, c, load, vec6(q), Vec6::Zero(), vec6(d), t);  // g + M d
+  double A = HUGE_VAL;
+  for (int j = 0; j < URT_NJ; j++) {
+    const double md = std::fabs(t[j] - g[j]);
+    if (md > 1e-12) {
+      const double head = kOptTorqueShare * m->joint[j].torque_max - std::fabs(g[j]);
+      A = std::fmin(A, std::fmax(head, 0.0) / md);
+    }
+  }
+  return std::fmax(A, kOptMinAccel);
+}
+
+double feasible_joint_move_accel(const urt_model_t* m, const urt_ctrl_t* c,
+                                 const urt_payload_t& load, const double* q_s, const double* dq,
+                                 double D) noexcept {
+  if (!(D > 0.0)) {
+    return HUGE_VAL;
+  }
+  double d[URT_NJ], q[URT_NJ], A = HUGE_VAL;
+  for (int j = 0; j < URT_NJ; j++) {
+    d[j] = dq[j] / D;
+  }
+  for (int k = 0; k <= 2; k++) {  // start, middle, end
+    for (int j = 0; j < URT_NJ; j++) {
+      q[j] = q_s[j] + 0.5 * k * dq[j];
+    }
+    A = std::fmin(A, feasible_accel(m, c, load, q, d));
+  }
+  return A;
+}
+
 double friction_ff_scaled(const urt_model_t* m, int j, double qd, double viscous,
                           double coulomb) noexcept {
   if (!m->friction[j].enabled || (viscous == 0.0 && coulomb == 0.0)) {

@@ -75,6 +75,22 @@ double friction_ff_scaled(const urt_model_t* m, int j, double qd, double viscous
 void model_torque(const urt_model_t* m, const urt_ctrl_t* c, const urt_payload_t& load,
                   const double* q, const double* qd, const double* qdd, double* tau) noexcept;
 
+// optimovej/optimovel's "maximum acceleration of the robot" (UR: a is a fraction of it): the
+// acceleration A along the joint-space direction d (rad/s² per unit of d) for which every
+// joint's inertial torque M(q)·d·A plus its gravity stays within kOptTorqueShare of its
+// torque_max at q (the rest is left to friction, Coriolis and the position loops). Never below
+// kOptMinAccel. The controller's gravity and payload. Context: RT (two RNEAs, no allocation).
+constexpr double kOptTorqueShare = 0.6;
+constexpr double kOptMinAccel = 0.1;  // [rad/s²]
+double feasible_accel(const urt_model_t* m, const urt_ctrl_t* c, const urt_payload_t& load,
+                      const double* q, const double* d) noexcept;
+
+// The same for a joint move from q_s by dq (its largest component D): the least of the start,
+// the middle and the end, along dq/D, so the leading joint's acceleration [rad/s²].
+double feasible_joint_move_accel(const urt_model_t* m, const urt_ctrl_t* c,
+                                 const urt_payload_t& load, const double* q_s, const double* dq,
+                                 double D) noexcept;
+
 // Joint j's torque within what the drives (and urt_command_set) accept [N m].
 double clamp_torque(const urt_model_t* m, int j, double tau) noexcept;
 

@@ -32,7 +32,8 @@ void plan(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
   }
   double v = cmd.v, a = cmd.a;
   if (cmd.kind == URT_CTRL_OPTIMOVEJ) {
-    // the fraction of every joint's limit: the joint that needs the longest sets the pace
+    // the fraction of every joint's limit: the joint that needs the longest sets the pace;
+    // the acceleration a fraction of what the drives' torques allow along the move
     v = a = HUGE_VAL;
     for (int j = 0; j < URT_NJ && D > 0.0; j++) {
       double f = std::fabs(mj.dq[j]) / D;
@@ -41,6 +42,8 @@ void plan(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
         a = std::fmin(a, cmd.a * kAccMargin * m->joint[j].qdd_max / f);
       }
     }
+    a = std::fmin(a, cmd.a * feasible_joint_move_accel(m, c, e.d->live.payload, mj.q_start,
+                                                       mj.dq, D));
   }
   for (int j = 0; j < URT_NJ && D > 0.0; j++) {
     double f = std::fabs(mj.dq[j]) / D;  // this joint's share of the leading axis' motion

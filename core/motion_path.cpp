@@ -106,7 +106,7 @@ void begin(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
     Mat3 Re;
     Vec6 dx;
     tool_eval(st.seg[0], 0.0, pe, Re, dx);
-    opti_limits(e, st.move[0], J, dx);
+    opti_limits(e, st.move[0], J, dx, c->q1);
   }
   set_zone(e, st, 0);
   c->motion = URT_MOTION_PATH;
@@ -172,7 +172,10 @@ uint32_t tick(const MotionEnv& e) {
     const double a = accel(st);
     double to_end;
     const double lim = speed_limit(st, a, to_end);
-    const double sd1 = std::fmax(0.0, std::fmin(st.sd + a * dt, lim));
+    // never slower than braking at a: a limit that drops at once (a new piece whose speed the
+    // joints allow is lower where it really begins than estimated when it was planned, an
+    // optimovel after a fast joint move) is met by braking, not by a step in the joints' speed
+    const double sd1 = std::fmax(0.0, std::fmax(std::fmin(st.sd + a * dt, lim), st.sd - a * dt));
     const double ds = 0.5 * (st.sd + sd1) * dt;
     if (dt > 0.0 && (ds >= to_end || (sd1 <= a * dt && to_end <= sd1 * dt + 1e-12))) {
       end = true;  // lands on the end
@@ -268,7 +271,7 @@ bool blend(const MotionEnv& e, const urt_ctrl_cmd_t& next) {
       Mat3 Rb;
       Vec6 dx;
       tool_eval(b, 0.0, pb, Rb, dx);
-      opti_limits(e, mb, J, dx);
+      opti_limits(e, mb, J, dx, q_end);
     } else {
       ok = false;
     }

@@ -32,6 +32,26 @@ static double trapezoid_time(double D, double v, double a) {
   return D * a <= v * v ? 2.0 * sqrt(D / a) : D / v + v / a;
 }
 
+/* optimovej's "maximum acceleration": along the direction d (largest component 1), what keeps
+ * every joint's M(q)·d·A + |g(q)| within 0.6 of its torque_max, the least of the move's start,
+ * middle and end (core/controller_internal.hpp), from the model's mass matrix and gravity */
+static double torque_accel(const urt_model_t *m, const double *q0, const double *dq) {
+  double D = 0.0, A = HUGE_VAL;
+  for (int j = 0; j < URT_NJ; j++) D = fmax(D, fabs(dq[j]));
+  for (int k = 0; k <= 2; k++) {
+    double q[URT_NJ], M[36], g[URT_NJ];
+    for (int j = 0; j < URT_NJ; j++) q[j] = q0[j] + 0.5 * k * dq[j];
+    urt_arm_mass_matrix(m, q, M);
+    urt_arm_gravity(m, q, g);
+    for (int i = 0; i < URT_NJ; i++) {
+      double md = 0.0;
+      for (int j = 0; j < URT_NJ; j++) md += M[i * 6 + j] * dq[j] / D;
+      if (fabs(md) > 1e-12) A = fmin(A, fmax(0.6 * m->joint[i].torque_max - fabs(g[i]), 0.0) / fabs(md));
+    }
+  }
+  return fmax(A, 0.1);
+}
+
 static void test_optimovej__fractions_of_the_joint_limits_set_the_time(void **state) {
   (void)state;
   rig_t r = rig_new(urt_test_quiet, 0.002, 1);
@@ -50,12 +70,19 @@ static void test_optimovej__fractions_of_the_joint_limits_set_the_time(void **st
     rig_period(&r, NULL);
     t += r.c->period;
   }
-  // the planner's margins on the model's limits (0.98 qd_max, 0.9 qdd_max)
-  const double v = fv * 0.98 * r.m->joint[0].qd_max, a = fa * 0.9 * r.m->joint[0].qdd_max;
+  // the planner's margins on the model's limits (0.98 qd_max, 0.9 qdd_max), the acceleration
+  // also within what the torques allow
+  double q0[URT_NJ], dq[URT_NJ] = {D, 0, -0.25, 0, 0, 0};
+  memcpy(q0, c.q, sizeof q0);
+  q0[0] -= D;
+  q0[2] += 0.25;
+  const double A = torque_accel(r.m, q0, dq);
+  const double v = fv * 0.98 * r.m->joint[0].qd_max,
+               a = fa * fmin(0.9 * r.m->joint[0].qdd_max, A);
   const double T = trapezoid_time(D, v, a);
-  print_message("optimovej %.1f/%.1f over %.2f rad: done after %.4f s, trapezoid %.4f s; peak "
-                "set-point speed %.6f rad/s (expected %.6f)\n",
-                fa, fv, D, t, T, vmax, v);
+  print_message("optimovej %.1f/%.1f over %.2f rad: done after %.4f s, trapezoid %.4f s (a %.2f "
+                "rad/s², the torques' %.2f); peak set-point speed %.6f rad/s (expected %.6f)\n",
+                fa, fv, D, t, T, a, A, vmax, v);
   assert_true(t >= T - 1e-9 && t <= T + 2.0 * r.c->period);
   assert_near(vmax, v, 1e-9);
   assert_near(r.c->q1[0], c.q[0], 1e-12);
@@ -83,11 +110,47 @@ static void test_optimovej__fractions_outside_0_1_are_refused(void **state) {
   memcpy(c.q, r.c->q1, sizeof c.q);
   c.q[5] += 0.2;
   c.a = c.v = 1.0;
+  const double dq[URT_NJ] = {0, 0, 0, 0, 0, 0.2};
+  const double A = torque_accel(r.m, r.c->q1, dq);
   double t = time_to_done(&r, &c, 3.0);
   const double T =
-      trapezoid_time(0.2, 0.98 * r.m->joint[5].qd_max, 0.9 * r.m->joint[5].qdd_max);
+      trapezoid_time(0.2, 0.98 * r.m->joint[5].qd_max, fmin(0.9 * r.m->joint[5].qdd_max, A));
   print_message("optimovej 1/1 over 0.2 rad: %.4f s, trapezoid %.4f s\n", t, T);
   assert_true(t >= T - 1e-9 && t <= T + 2.0 * r.c->period);
+  rig_free(&r);
+}
+
+/* optimovej(a=1, v=1) swinging the stretched arm's base and shoulder: UR's optimovej moves "as
+ * fast as the robot's limits allow", so the drives' torques stay within torque_max and no
+ * protective stop comes (with a = 0.9 qdd_max, before, the set-point asked for 2.4 times the
+ * torque_max and the torque limit stopped the arm) */
+static void test_optimovej__full_fractions_stay_within_the_torques(void **state) {
+  (void)state;
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  urt_ctrl_cmd_t c = rig_cmd(&r, URT_CTRL_OPTIMOVEJ);
+  const double stretched[URT_NJ] = {0.0, -0.3, 0.3, -1.57, -1.57, 0.0};
+  memcpy(c.q, stretched, sizeof c.q);
+  c.a = c.v = 0.3;
+  time_to_done(&r, &c, 20.0);
+  run_for(&r, 0.5);
+  c = rig_cmd(&r, URT_CTRL_OPTIMOVEJ);
+  memcpy(c.q, stretched, sizeof c.q);
+  c.q[0] += 2.0;
+  c.q[1] -= 1.2;
+  c.a = c.v = 1.0;
+  rig_period(&r, &c);
+  double peak = 0.0;
+  for (int i = 0; i < 5000 && r.c->motion_done_id < c.id; i++) {
+    urt_snapshot_t s;
+    urt_snapshot_fill(r.m, r.c, r.d, &s);
+    for (int j = 0; j < URT_NJ; j++) peak = fmax(peak, fabs(s.m_target[j]) / r.m->joint[j].torque_max);
+    rig_period(&r, NULL);
+  }
+  print_message("optimovej 1/1 swinging the stretched arm: done %d, pstop %#x, peak set-point "
+                "torque %.3f of torque_max\n", r.c->motion_done_id >= c.id, r.d->pstop, peak);
+  assert_true(r.c->motion_done_id >= c.id);
+  assert_int_equal(r.d->pstop, 0);
+  assert_true(peak < 1.0);
   rig_free(&r);
 }
 
@@ -447,6 +510,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_optimovej__fractions_of_the_joint_limits_set_the_time),
       cmocka_unit_test(test_optimovej__fractions_outside_0_1_are_refused),
+      cmocka_unit_test(test_optimovej__full_fractions_stay_within_the_torques),
       cmocka_unit_test(test_speedj__a_late_program_stream_ends_where_the_on_time_one_does),
       cmocka_unit_test(test_speedj__runs_on_while_the_program_is_behind),
       cmocka_unit_test(test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them),

@@ -90,3 +90,34 @@ def test_blends_movep_movec_optimovel_from_a_program():
         assert len(arc) > 100
         assert max(arc) < 1e-6
         assert dist(end, end_c) < 1e-6
+
+
+def test_urcls_motion_sequence_blends_through_optimovej_into_optimovel():
+    """URCL's InstructionExecutorTest.execute_motion_sequence_success, as its external-control
+    script runs it on 5.21 and later: movel with r into optimovej(a=0.4, v=0.7, r=0.1) into
+    optimovel. Before, the arm stopped on the torque limit where the fast joint blend handed
+    over to the tool move (the path speed stepped down at once to what the joints allow along
+    the line; the set-point's joint accelerations jumped to 600 rad/s²); now it brakes. Still
+    there (printed, not asserted): where a joint move's blend hands over to a tool move, the
+    joint speeds change direction within one tick (about 100 rad/s² here, optimovel taking over
+    at 11.26 s): the blend ends on joint rates estimated when it was planned, not those of the
+    IK where the tool move really begins."""
+    seq = [
+        "movej([-1.57, -1.57, 0, 0, 0, 0], t=5, r=0.1)",
+        "movej([-1.57, -1.6, 1.6, -0.7, 0.7, 0.2], t=5, r=0.1)",
+        "movel(p[-0.203, 0.263, 0.559, 0.68, -1.083, -2.076], t=2, r=0.1)",
+        "movel(p[-0.203, 0.463, 0.559, 0.68, -1.083, -2.076], t=2, r=0.1)",
+        "optimovej([-1.57, -1.57, 1.6, -0.5, 0.4, 0.3], a=0.4, v=0.7, r=0.1)",
+        "optimovel(p[-0.203, 0.263, 0.559, 0.68, -1.083, -2.076], a=0.4, v=0.7, r=0.1)",
+    ]
+    with Emulator(version="5.25.1") as emu, RtReader(emu.host) as rt:
+        packets = run_program(emu, rt, "def sequence():\n" + "".join(f"  {s}\n" for s in seq)
+                              + "end\n", t_max=40.0)
+        worst = max(max(abs(a) for a in p["qdd_target"]) for p in packets)
+        stops = sum(p["safety_mode"] != 1 for p in packets)
+        end = packets[-1]["tool_vector_target"]
+        print(f"\nURCL's sequence: {len(packets)} packets, largest set-point acceleration "
+              f"{worst:.1f} rad/s², packets not in normal safety mode {stops}, end off "
+              f"{dist(end, [-0.203, 0.263, 0.559]):.2e} m")
+        assert stops == 0
+        assert dist(end, [-0.203, 0.263, 0.559]) < 1e-5
