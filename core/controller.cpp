@@ -311,6 +311,7 @@ int urt_ctrl_init(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, doub
   }
   // the encoders' disagreement now (the gear's deflection at rest) is the first reference
   c->enc_joint = -1;
+  c->fault_joint = -1;
   tick_encoder_check(m, c, d, false);
   return URT_OK;
 }
@@ -372,7 +373,10 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       break;
     }
     case URT_CTRL_POWER_ON:
-      if (c->robot_mode == URT_ROBOT_MODE_POWER_OFF) {
+      // a faulted joint keeps the arm off until the safety system is restarted
+      if (c->safety_mode == URT_SAFETY_MODE_FAULT) {
+        c->fault |= URT_CTRL_FAULT_NOT_RUNNING;
+      } else if (c->robot_mode == URT_ROBOT_MODE_POWER_OFF) {
         c->robot_mode = URT_ROBOT_MODE_IDLE;
       }
       break;
@@ -382,7 +386,10 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       hold_at(c, measured_q(d));
       break;
     case URT_CTRL_BRAKE_RELEASE:
-      if (c->robot_mode == URT_ROBOT_MODE_IDLE || c->robot_mode == URT_ROBOT_MODE_POWER_OFF) {
+      if (c->safety_mode == URT_SAFETY_MODE_FAULT) {
+        c->fault |= URT_CTRL_FAULT_NOT_RUNNING;
+      } else if (c->robot_mode == URT_ROBOT_MODE_IDLE ||
+                 c->robot_mode == URT_ROBOT_MODE_POWER_OFF) {
         c->robot_mode = URT_ROBOT_MODE_RUNNING;  // the set-point keeps holding where it was
       }
       break;
@@ -394,6 +401,16 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
         hold_at(c, measured_q(d));
         model_torque(m, c, d->live.payload, c->q1, c->qd1, c->qdd1, c->tau_model1);
         std::memcpy(c->tau_model0, c->tau_model1, sizeof c->tau_model0);
+      }
+      break;
+    case URT_CTRL_RESTART_SAFETY:
+      // the way out of a joint fault: NORMAL, still powered off (power on, brake release next)
+      if (c->safety_mode == URT_SAFETY_MODE_FAULT) {
+        finish_motion(c);
+        c->robot_mode = URT_ROBOT_MODE_POWER_OFF;
+        c->safety_mode = URT_SAFETY_MODE_NORMAL;
+        c->fault_joint = -1;
+        hold_at(c, measured_q(d));
       }
       break;
     case URT_CTRL_PROGRAM_STATE:
@@ -584,6 +601,17 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
   if (enc >= 0) {
     c->enc_joint = enc;
     protective_stop(c, d, URT_CTRL_FAULT_ENCODER, URT_PSTOP_ENCODER);
+  }
+  // a drive held at its current limit: the joint faults and the arm powers off, its brakes
+  // holding it where it is; a running program ends (its motion is refused), as on a UR
+  const int oc = tick_overcurrent_check(m, c, d, running(c) && !d->pstop);
+  if (oc >= 0) {
+    c->fault |= URT_CTRL_FAULT_JOINT;
+    c->fault_joint = oc;
+    c->safety_mode = URT_SAFETY_MODE_FAULT;
+    c->robot_mode = URT_ROBOT_MODE_POWER_OFF;
+    finish_motion(c);
+    hold_at(c, measured_q(d));
   }
   if (!running(c)) {
     c->torque_mask = c->torque_mask_last = 0;

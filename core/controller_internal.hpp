@@ -109,6 +109,15 @@ void tick_thermal(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d) noex
 int tick_encoder_check(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d,
                        bool run) noexcept;
 
+// ---- the over-current check (controller_overcurrent.cpp) ----
+
+// Time each joint's drive asking for its current limit (|i_ref| at i_max) while the arm runs
+// (run); the first joint that has done so for URT_OVERCURRENT_TIME without a break, or −1.
+// While it does not run the times restart. Once per period, before the motions; the caller
+// faults the joint. Context: RT.
+int tick_overcurrent_check(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d,
+                           bool run) noexcept;
+
 // ---- small helpers ----
 
 // six doubles as a vector and back

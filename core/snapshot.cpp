@@ -106,7 +106,9 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
     s->tau_from_current[j] = d->i_fb[j] * kt * ratio;  // what UR's actual_current_as_torque is
     s->v_actual[j] = d->v_sup[j];
     s->temperature[j] = c->temperature[j];
-    s->joint_mode[j] = joint_mode(c->robot_mode);
+    s->joint_mode[j] = c->safety_mode == URT_SAFETY_MODE_FAULT && j == c->fault_joint
+                           ? URT_JOINT_MODE_FAULT
+                           : joint_mode(c->robot_mode);
 
     s->motor_angle[j] = d->x[j][URT_X_QM];
     s->motor_speed[j] = d->x[j][URT_X_QDM];
@@ -266,6 +268,7 @@ extern "C" void urt_snapshot_fill(const urt_model_t* m, const urt_ctrl_t* c, urt
   s->pstop = d->pstop;
   s->ctrl_fault = c->fault;
   s->enc_joint = c->enc_joint;
+  s->fault_joint = c->fault_joint;
   s->speed_slider = c->speed_slider;
   // the slider's and the pause's scaling, and the trajectory limiter's while a speedj needs it
   s->motion_rate = c->speed_scaling * c->pause_scale;

@@ -539,7 +539,15 @@ static void cmd_clear_operational_mode(const call_t *c) {
   c->st->operational_mode = URT_DASHBOARD_OPMODE_NONE;
 }
 
+/* a joint in its fault state keeps the arm off until `restart safety` (the controller refuses
+ * POWER_ON and BRAKE_RELEASE then, core/controller.cpp); the refusal's words are urtwin's */
+static int faulted(const call_t *c) { return c->robot->safety_mode == URT_SAFETY_MODE_FAULT; }
+
 static void cmd_power_on(const call_t *c) {
+  if (faulted(c)) {
+    put(c->w, "Failed to execute: power on");
+    return;
+  }
   add_ctrl(c->act, URT_CTRL_POWER_ON);
   put(c->w, "Powering on");
 }
@@ -551,6 +559,10 @@ static void cmd_power_off(const call_t *c) {
 }
 
 static void cmd_brake_release(const call_t *c) {
+  if (faulted(c)) {
+    put(c->w, "Failed to execute: brake release");
+    return;
+  }
   // from POWER_OFF the real controller powers on on the way (ur_robot_driver documents this)
   if (c->robot->robot_mode == URT_ROBOT_MODE_POWER_OFF) {
     add_ctrl(c->act, URT_CTRL_POWER_ON);
@@ -586,7 +598,7 @@ static void cmd_unlock_protective_stop(const call_t *c) {
 static void cmd_restart_safety(const call_t *c) {
   stop_if_active(c);
   add_ctrl(c->act, URT_CTRL_POWER_OFF);
-  c->act->restart_safety = 1;
+  add_ctrl(c->act, URT_CTRL_RESTART_SAFETY);
   put(c->w, "Restarting safety");
 }
 
@@ -829,7 +841,6 @@ size_t urt_dashboard_handle(const urt_dashboard_ctx_t *ctx, const urt_dashboard_
                             char *reply, size_t cap, urt_dashboard_action_t *action) {
   action->program = URT_DASHBOARD_PROG_NONE;
   action->n_ctrl = 0;
-  action->restart_safety = 0;
   action->session = URT_DASHBOARD_SESSION_KEEP;
   action->log_text = NULL;
   action->log_len = 0;

@@ -101,6 +101,11 @@ void urt__script_broadcast_text(urt_emulator_t *e, const char *text) {
  * argument 0 and the words are urtwin's; the level is UR's for protective stops (a warning,
  * the service note). URCL's sendScriptBlocking fails on it, as URCL's
  * test_send_script_blocking_fail_on_robot_errors expects for a movel out of the workspace.
+ * A joint fault (URT_CTRL_FAULT_JOINT: a drive held at its current limit, safety mode FAULT)
+ * gets ERROR_CODE C281A0 "Robot State Machine: <joint> joint entered the Fault State" at FAULT
+ * level: UR's code and words, as a UR5e reported "C281A3: Robot State Machine: Shoulder joint
+ * eneterd the Fault State" (forum.universal-robots.com t/11925); what UR's argument numbers
+ * (3 for that shoulder) is not known, so it is 0 here, and the level is urtwin's.
  * Stops with other causes (targets outside the joint limits, refused before they run) get the
  * SAFETY_MODE message only: urtwin does not model UR's error codes for them. Code, argument
  * and report data of SAFETY_MODE are 0: their values on a real controller are not documented. Called before the tick's robot state,
@@ -109,6 +114,9 @@ void urt__script_broadcast_text(urt_emulator_t *e, const char *text) {
  * URCL's test_read_safety_mode sees PROTECTIVE_STOP in the message, then asks for an unlock
  * and waits 1 ms for RobotModeData's flag to clear, which it expects to time out; with the
  * state 100 ms behind, the flag it read was still the old, clear one. */
+static const char *const kJoint[] = {"Base", "Shoulder", "Elbow", "Wrist 1", "Wrist 2",
+                                     "Wrist 3"};
+
 /* one ERROR_CODE message (argument 0) on the primary interface, and its line in the log */
 static void send_error_code(urt_emulator_t *e, const urt_snapshot_t *s, int32_t code,
                             int32_t level, const char *text) {
@@ -147,16 +155,30 @@ bool urt__script_safety_tick(urt_emulator_t *e, const urt_snapshot_t *s) {
     // refusal bits), which the primary interface's messages do not carry
     char bits[128], joint[48] = "";
     if ((s->pstop & URT_PSTOP_ENCODER) && s->enc_joint >= 0 && s->enc_joint < 6) {
-      static const char *const kJoint[] = {"Base", "Shoulder", "Elbow", "Wrist 1", "Wrist 2",
-                                           "Wrist 3"};
       snprintf(joint, sizeof joint, " of the %s joint", kJoint[s->enc_joint]);
     }
     snprintf(cause, sizeof cause, " (%s%s; controller fault 0x%x)",
              urt_pstop_text(s->pstop, bits, sizeof bits), joint, (unsigned)s->ctrl_fault);
   }
+  const bool joint_fault = mode == URT_SAFETY_MODE_FAULT &&
+                           (s->ctrl_fault & URT_CTRL_FAULT_JOINT) && s->fault_joint >= 0 &&
+                           s->fault_joint < 6;
+  if (joint_fault) {
+    snprintf(cause, sizeof cause,
+             " (over-current of the %s joint: its drive at its current limit for %g s; "
+             "controller fault 0x%x)",
+             kJoint[s->fault_joint], URT_OVERCURRENT_TIME, (unsigned)s->ctrl_fault);
+  }
   snprintf(line, sizeof line, "safety mode %s%s",
            mode >= 1 && mode <= 9 ? kMode[mode] : "(unknown)", cause);
   urt_ctrl_log_add(&e->log, s->time, mode == URT_SAFETY_MODE_NORMAL ? "INFO" : "WARN", line);
+  if (joint_fault) {
+    char text[96];
+    snprintf(text, sizeof text, "Robot State Machine: %s joint entered the Fault State",
+             kJoint[s->fault_joint]);
+    send_error_code(e, s, 281, URT_PRIMARY_REPORT_FAULT, text);
+    return true;
+  }
   if (mode != URT_SAFETY_MODE_PROTECTIVE_STOP) {
     return true;
   }

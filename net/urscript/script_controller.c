@@ -70,6 +70,7 @@ static const char *fault_text(uint32_t f, const char *unknown) {
   if (f & URT_CTRL_FAULT_IK) return "no inverse kinematics solution";
   if (f & URT_CTRL_FAULT_BAD_ARGUMENT) return "argument out of range";
   if (f & URT_CTRL_FAULT_PSTOP) return "protective stop";
+  if (f & URT_CTRL_FAULT_JOINT) return "joint fault";
   return unknown;
 }
 

@@ -61,6 +61,7 @@ enum {
 enum {
   URT_JOINT_MODE_BACKDRIVE = 238,
   URT_JOINT_MODE_POWER_OFF = 239,
+  URT_JOINT_MODE_FAULT = 252,    /* the joint whose drive faulted (URT_CTRL_FAULT_JOINT)     */
   URT_JOINT_MODE_RUNNING = 253,
   URT_JOINT_MODE_IDLE = 255
 };
@@ -164,11 +165,15 @@ typedef enum urt_ctrl_cmd_kind {
                                  speed the joints allow along the line (qdd_max, qd_max with the
                                  planner's margins 0.9, 0.98), r as movel                    */
   /* added by the fault issue: live injection (URTWIN_FAULT on LCM) */
-  URT_CTRL_FAULT              /* inject (index 1) or clear (index 0) a fault in the physics;
+  URT_CTRL_FAULT,             /* inject (index 1) or clear (index 0) a fault in the physics;
                                  fields as urt_fault_cmd_pack (urt/faults.h) writes them. An
                                  onset before the tick's time starts the profile at the tick.
                                  Invalid or with URT_MAX_FAULTS installed: refused
                                  (URT_CTRL_FAULT_BAD_ARGUMENT), counted in faults_refused    */
+  /* added by the fault issue: the way out of a joint fault */
+  URT_CTRL_RESTART_SAFETY     /* dashboard `restart safety`: a FAULT safety mode (a joint
+                                 fault) clears to NORMAL with the arm powered off; the
+                                 dashboard sends POWER_OFF first                            */
 } urt_ctrl_cmd_kind_t;
 
 typedef struct urt_ctrl_cmd {
@@ -201,8 +206,11 @@ enum {
   URT_CTRL_FAULT_JUMP = 1u << 6,           /* an external set-point (DIRECT) further from the
                                               set-point than its joint moves in one period at
                                               qd_max → pstop (C204A0 on 30001)            */
-  URT_CTRL_FAULT_ENCODER = 1u << 7         /* a joint's motor and joint encoders disagree by
+  URT_CTRL_FAULT_ENCODER = 1u << 7,        /* a joint's motor and joint encoders disagree by
                                               more than URT_ENCODER_TOLERANCE → pstop    */
+  URT_CTRL_FAULT_JOINT = 1u << 8           /* a joint's drive asked for its current limit for
+                                              URT_OVERCURRENT_TIME (over-current): the joint
+                                              faults, safety mode FAULT, arm powered off */
 };
 
 #define URT_SERVOJ_REPLAY 32  /* periods a late servoj can be run from its issuing tick */
@@ -212,6 +220,14 @@ enum {
  * largest the model's joints show without a sensor fault: 0.04 rad, the shoulder with its gear
  * stiffness at the catalogue's 4 % under the excitation trajectory (healthy: 8e-4). */
 #define URT_ENCODER_TOLERANCE 0.05
+/* [s] how long a running joint's drive may ask for its whole current (|i_ref| at i_max, the
+ * drive's limit) before the controller takes it for an over-current and faults the joint
+ * (core/controller_overcurrent.cpp). [P]: UR's joint firmware has the protection, its
+ * threshold is not public. A planned motion's feed-forward stays within torque_max (the
+ * physics protective-stops it otherwise), so a healthy arm saturates only in tracking
+ * transients of a few milliseconds; a drive held at its limit this long carries a load it
+ * cannot (a collision, a dragging brake, a motor that lost its torque constant). */
+#define URT_OVERCURRENT_TIME 0.25
 
 typedef struct urt_ctrl {
   double period;              /* controller period [s] (0.002 or 0.008)          */
@@ -304,6 +320,12 @@ typedef struct urt_ctrl {
    * [rad], and the joint whose check stopped the arm (−1: none) */
   double enc_motor_err[URT_NJ], enc_anchor[URT_NJ];
   int32_t enc_joint;
+
+  /* the over-current check (core/controller_overcurrent.cpp): per joint, how long its drive
+   * has asked for its current limit without a break [s], the longest such run since start
+   * [s], and the joint that faulted (−1: none; set with safety mode FAULT) */
+  double oc_time[URT_NJ], oc_time_max[URT_NJ];
+  int32_t fault_joint;
 } urt_ctrl_t;
 
 /* Start at rest at the data's joint positions, in RUNNING + NORMAL (powered = 1) or

@@ -94,6 +94,7 @@ typedef struct urt_snapshot {
   urt_fault_truth_t fault_truth;
   uint32_t faults_applied, faults_refused;  /* live fault commands (URT_CTRL_FAULT)   */
   int32_t enc_joint;          /* the joint whose encoders disagreed (URT_PSTOP_ENCODER), −1 */
+  int32_t fault_joint;        /* the joint in its fault state (URT_CTRL_FAULT_JOINT), −1   */
 } urt_snapshot_t;
 
 /* Fill a snapshot from the physics and the controller (calls urt_data_update_outputs).

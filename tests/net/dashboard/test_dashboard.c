@@ -259,6 +259,25 @@ static void test_dashboard__play_fails_without_program_or_in_protective_stop(voi
   assert_string_equal(say(fx, "play"), "Starting program");
 }
 
+/* a joint fault (safety mode FAULT) keeps the arm off: power on and brake release are
+ * refused until `restart safety`, which powers off and clears the fault */
+static void test_dashboard__a_joint_fault_refuses_power_on_until_restart_safety(void **state) {
+  fixture_t *fx = *state;
+  fx->robot.robot_mode = URT_ROBOT_MODE_POWER_OFF;
+  fx->robot.safety_mode = fx->robot.safety_status = URT_SAFETY_MODE_FAULT;
+  assert_string_equal(say(fx, "safetymode"), "Safetymode: FAULT");
+  assert_string_equal(say(fx, "power on"), "Failed to execute: power on");
+  no_action(fx);
+  assert_string_equal(say(fx, "brake release"), "Failed to execute: brake release");
+  no_action(fx);
+  assert_string_equal(say(fx, "restart safety"), "Restarting safety");
+  assert_int_equal(fx->act.n_ctrl, 2);
+  assert_int_equal(fx->act.ctrl[1], URT_CTRL_RESTART_SAFETY);
+  fx->robot.safety_mode = fx->robot.safety_status = URT_SAFETY_MODE_NORMAL;
+  assert_string_equal(say(fx, "power on"), "Powering on");
+  assert_int_equal(fx->act.ctrl[0], URT_CTRL_POWER_ON);
+}
+
 static void test_dashboard__pause_and_stop_when_nothing_runs(void **state) {
   fixture_t *fx = *state;
   assert_string_equal(say(fx, "pause"), "Failed to execute: pause");
@@ -372,8 +391,9 @@ static void test_dashboard__commands_with_fixed_replies(void **state) {
   assert_false(fx->st.opmode_by_dashboard);
   assert_string_equal(say(fx, "get operational mode"), "NONE");  /* no mode password */
   assert_string_equal(say(fx, "restart safety"), "Restarting safety");
+  assert_int_equal(fx->act.n_ctrl, 2);
   assert_int_equal(fx->act.ctrl[0], URT_CTRL_POWER_OFF);
-  assert_true(fx->act.restart_safety);
+  assert_int_equal(fx->act.ctrl[1], URT_CTRL_RESTART_SAFETY);
   assert_string_equal(say(fx, "shutdown"), "Shutting down");
   assert_int_equal(fx->act.session, URT_DASHBOARD_SESSION_SHUTDOWN);
   assert_string_equal(say(fx, "load installation default.installation"),
@@ -688,6 +708,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_dashboard__urcl_run_program_sequence, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__brake_release_from_power_off_powers_on_first, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__play_fails_without_program_or_in_protective_stop, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_dashboard__a_joint_fault_refuses_power_on_until_restart_safety, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__pause_and_stop_when_nothing_runs, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__queries_reply_byte_exact, setup, teardown),
       cmocka_unit_test_setup_teardown(test_dashboard__commands_with_fixed_replies, setup, teardown),

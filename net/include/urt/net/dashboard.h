@@ -172,8 +172,8 @@ typedef enum urt_dashboard_session_op {
 typedef struct urt_dashboard_action {
   int program;                /* urt_dashboard_program_op_t                                  */
   int n_ctrl;                 /* number of controller commands in ctrl[]                      */
-  int32_t ctrl[2];            /* urt_ctrl_cmd_kind_t: POWER_ON, POWER_OFF, BRAKE_RELEASE, UNLOCK_PSTOP */
-  int restart_safety;         /* also clear safety faults (restart safety): with ctrl POWER_OFF */
+  int32_t ctrl[2];            /* urt_ctrl_cmd_kind_t: POWER_ON, POWER_OFF, BRAKE_RELEASE,
+                               * UNLOCK_PSTOP, RESTART_SAFETY                            */
   int session;                /* urt_dashboard_session_op_t                                  */
   const char *log_text;       /* addToLog text (points into the request line), or NULL      */
   size_t log_len;
