@@ -100,15 +100,6 @@ static int b_servoc(vm *V, const us_node *n, sv *a, sv *out) {
   return urt__us_wait_for(V, n, urt__us_snap(V)->period, true, "servoc");  // one control cycle
 }
 
-/* the controller's version against major.minor.bugfix (all 0: the newest, so at least) */
-static bool version_at_least(const vm *V, int major, int minor, int bugfix) {
-  const int *v = V->h->version;
-  if (v[0] == 0 && v[1] == 0 && v[2] == 0) return true;
-  if (v[0] != major) return v[0] > major;
-  if (v[1] != minor) return v[1] > minor;
-  return v[2] >= bugfix;
-}
-
 /* direct_torque(torque, friction_comp, viscous_scale, coulomb_scale): the joint torques besides
  * gravity, which the controller adds (core/motion_torque.cpp). As UR's releases have it: none
  * before 5.23 (CB3 has none); 5.23 to 5.25.0 take friction_comp (default True: the whole
@@ -120,11 +111,10 @@ static int b_direct_torque(vm *V, const us_node *n, sv *a, sv *out) {
   static const double kViscous[URT_NJ] = {0.9, 0.9, 0.8, 0.9, 0.9, 0.9};
   static const double kCoulomb[URT_NJ] = {0.8, 0.8, 0.7, 0.8, 0.8, 0.8};
   const int *ver = V->h->version;
-  if (!version_at_least(V, 5, 23, 0)) {
-    return urt__us_fail(V, n, "direct_torque is not available on software %d.%d.%d (UR added it in 5.23)",
-                        ver[0], ver[1], ver[2]);
+  if (urt__us_require_version(V, n, "direct_torque", 5, 23, 0) != X_OK) {
+    return X_ERR;
   }
-  const bool scales = version_at_least(V, 5, 25, 1);
+  const bool scales = urt__us_version_at_least(V, 5, 25, 1);
   if (!scales && (a[2].t != V_NONE || a[3].t != V_NONE)) {
     return urt__us_fail(V, n, "direct_torque: viscous_scale and coulomb_scale need software 5.25.1 (this is %d.%d.%d)",
                         ver[0], ver[1], ver[2]);

@@ -60,12 +60,15 @@ static int b_movej(vm *V, const us_node *n, sv *a, sv *out) {
 }
 
 /* optimovej(q, a=0.3, v=0.3, r=0): a and v are fractions in (0, 1] of the joints' limits; the
- * controller (core/motion_movej.cpp) refuses fractions outside it */
+ * controller (core/motion_movej.cpp) refuses fractions outside it. UR added optimovej and
+ * optimovel in 5.21 (none on CB3): on an older emulated release a runtime error, as for
+ * direct_torque (URCL's tests skip them there; its script leaves them out) */
 static int b_optimovej(vm *V, const us_node *n, sv *a, sv *out) {
   urt_ctrl_cmd_t c = {.kind = URT_CTRL_OPTIMOVEJ};
   double x[6];
   bool is_pose;
-  if (urt__us_arg_vec6(V, n, a, 0, x, &is_pose) != X_OK ||
+  if (urt__us_require_version(V, n, "optimovej", 5, 21, 0) != X_OK ||
+      urt__us_arg_vec6(V, n, a, 0, x, &is_pose) != X_OK ||
       urt__us_arg_num(V, n, a, 1, 0.3, &c.a) != X_OK ||
       urt__us_arg_num(V, n, a, 2, 0.3, &c.v) != X_OK ||
       urt__us_arg_num(V, n, a, 3, 0, &c.r) != X_OK || to_joints(V, n, x, is_pose, c.q) != X_OK) {
@@ -123,7 +126,8 @@ static int b_optimovel(vm *V, const us_node *n, sv *a, sv *out) {
   urt_ctrl_cmd_t c = {.kind = URT_CTRL_OPTIMOVEL};
   double x[6];
   bool is_pose;
-  if (urt__us_arg_vec6(V, n, a, 0, x, &is_pose) != X_OK ||
+  if (urt__us_require_version(V, n, "optimovel", 5, 21, 0) != X_OK ||
+      urt__us_arg_vec6(V, n, a, 0, x, &is_pose) != X_OK ||
       urt__us_arg_num(V, n, a, 1, 0.3, &c.a) != X_OK ||
       urt__us_arg_num(V, n, a, 2, 0.3, &c.v) != X_OK ||
       urt__us_arg_num(V, n, a, 3, 0, &c.r) != X_OK || to_pose(V, n, x, is_pose, c.pose) != X_OK) {

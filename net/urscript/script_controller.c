@@ -60,6 +60,30 @@ int urt__us_submit(vm *V, const us_node *at, const urt_ctrl_cmd_t *cmd) {
   return urt__us_fail(V, at, "Controller command queue is full");
 }
 
+bool urt__us_version_at_least(const vm *V, int major, int minor, int bugfix) {
+  const int *v = V->h->version;
+  if (v[0] == 0 && v[1] == 0 && v[2] == 0) return true;
+  if (v[0] != major) return v[0] > major;
+  if (v[1] != minor) return v[1] > minor;
+  return v[2] >= bugfix;
+}
+
+int urt__us_require_version(vm *V, const us_node *at, const char *what, int major, int minor,
+                            int bugfix) {
+  if (urt__us_version_at_least(V, major, minor, bugfix)) {
+    return X_OK;
+  }
+  const int *v = V->h->version;
+  char since[24];
+  if (bugfix) {
+    snprintf(since, sizeof since, "%d.%d.%d", major, minor, bugfix);
+  } else {
+    snprintf(since, sizeof since, "%d.%d", major, minor);
+  }
+  return urt__us_fail(V, at, "%s is not available on software %d.%d.%d (UR added it in %s)", what,
+                      v[0], v[1], v[2], since);
+}
+
 bool urt__us_safety_ok(const urt_snapshot_t *s) {
   return s->safety_mode == URT_SAFETY_MODE_NORMAL || s->safety_mode == URT_SAFETY_MODE_REDUCED;
 }

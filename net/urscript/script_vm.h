@@ -215,6 +215,14 @@ int urt__us_wait_tick(vm *V, const us_node *at);
 /* Queue a command, retrying for SUBMIT_RETRY_TICKS ticks while the queue is full. */
 int urt__us_submit(vm *V, const us_node *at, const urt_ctrl_cmd_t *cmd);
 
+/* Whether the emulated controller's software is at least major.minor.bugfix (a version of all
+ * zeros is the newest, so it is). */
+bool urt__us_version_at_least(const vm *V, int major, int minor, int bugfix);
+/* X_OK when it is; otherwise X_ERR with "<what> is not available on software x.y.z (UR added it
+ * in <since>)", the runtime error a builtin of a later release gives. */
+int urt__us_require_version(vm *V, const us_node *at, const char *what, int major, int minor,
+                            int bugfix);
+
 /* Submit a motion and, if wait, block until the controller reports it done. */
 int urt__us_motion(vm *V, const us_node *at, const char *what, urt_ctrl_cmd_t *cmd, bool wait);
 

@@ -37,7 +37,7 @@ def dist(a, b):
 
 
 def test_blends_movep_movec_optimovel_from_a_program():
-    with Emulator() as emu, RtReader(emu.host) as rt:
+    with Emulator(version="5.21") as emu, RtReader(emu.host) as rt:
         run_program(emu, rt, f"def home():\n  movej([{fmt(WORK)}], a=3, v=2)\nend\n")
         p0 = rt.read_decoded()["tool_vector_target"]
         via = list(p0)

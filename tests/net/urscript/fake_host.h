@@ -43,7 +43,8 @@ typedef struct fake_host {
 } fake_host;
 
 static inline bool is_motion(int kind) {
-  return kind >= URT_CTRL_MOVEJ && kind <= URT_CTRL_STOPL;
+  return (kind >= URT_CTRL_MOVEJ && kind <= URT_CTRL_STOPL) || kind == URT_CTRL_OPTIMOVEJ ||
+         kind == URT_CTRL_MOVEP || kind == URT_CTRL_MOVEC || kind == URT_CTRL_OPTIMOVEL;
 }
 
 static inline bool fake_submit(void *ctx, const urt_ctrl_cmd_t *c) {

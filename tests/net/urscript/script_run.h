@@ -4,6 +4,7 @@
 #ifndef URT_TEST_SCRIPT_RUN_H
 #define URT_TEST_SCRIPT_RUN_H
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
