@@ -174,8 +174,13 @@ uint32_t tick(const MotionEnv& e) {
     const double lim = speed_limit(st, a, to_end);
     // never slower than braking at a: a limit that drops at once (a new piece whose speed the
     // joints allow is lower where it really begins than estimated when it was planned, an
-    // optimovel after a fast joint move) is met by braking, not by a step in the joints' speed
-    const double sd1 = std::fmax(0.0, std::fmax(std::fmin(st.sd + a * dt, lim), st.sd - a * dt));
+    // optimovel after a fast joint move) is met by braking, not by a step in the joints' speed.
+    // Braking to rest at the end is not held back by that floor: an optimovel's a follows the
+    // pose, and where it shrinks on the way in, the floor at the last tick's a let the path
+    // reach its end at speed and step to rest (wrist 2: 0.41 rad/s to 0 in one period)
+    const double lim_end = to_end < HUGE_VAL ? std::sqrt(2.0 * a * to_end) : HUGE_VAL;
+    const double sd1 = std::fmax(
+        0.0, std::fmin(std::fmax(std::fmin(st.sd + a * dt, lim), st.sd - a * dt), lim_end));
     const double ds = 0.5 * (st.sd + sd1) * dt;
     if (dt > 0.0 && (ds >= to_end || (sd1 <= a * dt && to_end <= sd1 * dt + 1e-12))) {
       end = true;  // lands on the end

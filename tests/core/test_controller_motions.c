@@ -154,6 +154,65 @@ static void test_optimovej__full_fractions_stay_within_the_torques(void **state)
   rig_free(&r);
 }
 
+/* URCL's motion sequence from 5.21 (its execute_motion_sequence test and instruction_executor
+ * example): movej, movel t=2, movel t=2 r=0.1, optimovej r=0.1, optimovel to rest, each sent as
+ * the program would, once the one before is done (early, inside its blend zone). The optimovel
+ * must brake to rest: its last period's step to zero joint speed is at most what the discrete
+ * braking leaves (about 2 a T, a the deceleration it brakes at), not a jump from speed. Before,
+ * the path, held at braking no faster than the last tick's acceleration, reached its end at
+ * speed: wrist 2 went from 0.41 rad/s to rest in one period (206 rad/s², 8 times its braking). */
+static void test_optimovel__a_sequence_ends_braked_to_rest(void **state) {
+  (void)state;
+  const double fr[2][2] = {{0.4, 0.7}, {1.0, 1.0}};
+  for (int k = 0; k < 2; k++) {
+    rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+    const double j0[6] = {-1.57, -1.6, 1.6, -0.7, 0.7, 0.2};
+    const double j1[6] = {-1.57, -1.57, 1.6, -0.5, 0.4, 0.3};
+    const double l1[6] = {-0.203, 0.263, 0.559, 0.68, -1.083, -2.076};
+    const double l2[6] = {-0.203, 0.463, 0.559, 0.68, -1.083, -2.076};
+    urt_ctrl_cmd_t seq[5];
+    seq[0] = rig_cmd(&r, URT_CTRL_MOVEJ);
+    memcpy(seq[0].q, j0, sizeof j0);
+    seq[0].a = seq[0].v = 1.0;
+    seq[1] = rig_tool_move(&r, URT_CTRL_MOVEL, l1, 1.2, 0.25, 0.0);
+    seq[1].t = 2.0;
+    seq[2] = rig_tool_move(&r, URT_CTRL_MOVEL, l2, 1.2, 0.25, 0.1);
+    seq[2].t = 2.0;
+    seq[3] = rig_cmd(&r, URT_CTRL_OPTIMOVEJ);
+    memcpy(seq[3].q, j1, sizeof j1);
+    seq[3].a = fr[k][0];
+    seq[3].v = fr[k][1];
+    seq[3].r = 0.1;
+    seq[4] = rig_tool_move(&r, URT_CTRL_OPTIMOVEL, l1, fr[k][0], fr[k][1], 0.0);
+    // the accelerations of the last 50 ms before the arrival: the braking
+    enum { kLast = 25 };
+    double qdd[kLast][URT_NJ], last_qd[URT_NJ] = {0};
+    memset(qdd, 0, sizeof qdd);
+    int next = 0, n = 0;
+    for (int i = 0; i < 10000; i++) {
+      const urt_ctrl_cmd_t *cmd = NULL;
+      if (next < 5 && (next == 0 || r.c->motion_done_id >= seq[next - 1].id)) cmd = &seq[next++];
+      memcpy(last_qd, r.c->qd1, sizeof last_qd);
+      rig_period(&r, cmd);
+      assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
+      if (next == 5 && r.c->motion_done_id >= seq[4].id) break;
+      memcpy(qdd[n++ % kLast], r.c->qdd1, sizeof qdd[0]);
+    }
+    assert_true(next == 5 && r.c->motion_done_id >= seq[4].id);
+    double brake[URT_NJ] = {0};
+    for (int i = 0; i < kLast; i++) {
+      for (int j = 0; j < URT_NJ; j++) brake[j] = fmax(brake[j], fabs(qdd[i][j]));
+    }
+    for (int j = 0; j < URT_NJ; j++) {
+      const double step = fabs(last_qd[j]) / r.c->period;
+      print_message("fractions %.1f/%.1f: joint %d steps to rest at %.1f rad/s², its braking "
+                    "in the last 50 ms %.1f\n", fr[k][0], fr[k][1], j, step, brake[j]);
+      assert_true(step <= 2.2 * brake[j] + 1e-9);
+    }
+    rig_free(&r);
+  }
+}
+
 /* ---- speedj from a program that ran late ---- */
 
 /* URCL's spline stream: one speedj(v_n, a = |v_n - v_(n-1)| / T, t = T) per period, v_n the
@@ -511,6 +570,7 @@ int main(void) {
       cmocka_unit_test(test_optimovej__fractions_of_the_joint_limits_set_the_time),
       cmocka_unit_test(test_optimovej__fractions_outside_0_1_are_refused),
       cmocka_unit_test(test_optimovej__full_fractions_stay_within_the_torques),
+      cmocka_unit_test(test_optimovel__a_sequence_ends_braked_to_rest),
       cmocka_unit_test(test_speedj__a_late_program_stream_ends_where_the_on_time_one_does),
       cmocka_unit_test(test_speedj__runs_on_while_the_program_is_behind),
       cmocka_unit_test(test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them),
