@@ -79,6 +79,17 @@ double speed_limit(const urt_path_state_t& st, double a, double& to_end) noexcep
   return std::fmin(lim, std::sqrt(2.0 * a * to_end));
 }
 
+// past the end of the head piece (not a blend, whose s is a time): on into the next, as far as
+// s reaches, through pieces it passes whole; into a blend, the distance left over becomes time
+// at the path speed
+void pass_covered_pieces(const MotionEnv& e, urt_path_state_t& st) noexcept {
+  while (st.nseg > 1 && st.seg[0].kind != URT_SEG_HERMITE && st.s >= st.seg[0].len) {
+    const double over = st.s - st.seg[0].len;
+    next_piece(e, st);
+    st.s = st.seg[0].kind == URT_SEG_HERMITE ? (st.sd > 0.0 ? over / st.sd : 0.0) : over;
+  }
+}
+
 // ---- the motion's hooks ----
 
 void begin(const MotionEnv& e, const urt_ctrl_cmd_t& cmd) {
@@ -163,10 +174,12 @@ uint32_t tick(const MotionEnv& e) {
   if (st.seg[0].kind == URT_SEG_HERMITE) {
     st.s += dt;
     if (st.s >= st.seg[0].T) {
-      // the blend is over: on to B at the speed it ends with
+      // the blend is over: on to B at the speed it ends with, through whatever of B the rest
+      // of the period covers (a piece between two blends can be shorter than that)
       const double over = st.s - st.seg[0].T;
       next_piece(e, st);
-      st.s = over * st.sd;
+      st.s = st.seg[0].kind == URT_SEG_HERMITE ? over : over * st.sd;
+      pass_covered_pieces(e, st);
     }
   } else {
     const double a = accel(st);
@@ -178,7 +191,16 @@ uint32_t tick(const MotionEnv& e) {
     // Braking to rest at the end is not held back by that floor: an optimovel's a follows the
     // pose, and where it shrinks on the way in, the floor at the last tick's a let the path
     // reach its end at speed and step to rest (wrist 2: 0.41 rad/s to 0 in one period)
-    const double lim_end = to_end < HUGE_VAL ? std::sqrt(2.0 * a * to_end) : HUGE_VAL;
+    // The end's limit is this period's own: after it (trapezoidal travel (sd + sd1)·dt/2) the
+    // rest must still stop at a in whole periods (sd1²/2a: exact for steps of a·dt), so that the
+    // last period leaves rest from at most a·dt. √(2·a·to_end) taken before the period's
+    // travel overshot it and left up to 3·a·dt for the last step (an optimovel at full
+    // fractions: wrist 2 from 0.51 rad/s to rest in one period)
+    const double adt = a * dt;
+    const double lim_end =
+        to_end < HUGE_VAL
+            ? 0.5 * (-adt + std::sqrt(std::fmax(0.0, adt * adt + 8.0 * a * to_end - 4.0 * adt * st.sd)))
+            : HUGE_VAL;
     const double sd1 = std::fmax(
         0.0, std::fmin(std::fmax(std::fmin(st.sd + a * dt, lim), st.sd - a * dt), lim_end));
     const double ds = 0.5 * (st.sd + sd1) * dt;
@@ -192,11 +214,7 @@ uint32_t tick(const MotionEnv& e) {
     } else {
       st.s += ds;
       st.sd = sd1;
-      while (st.nseg > 1 && st.seg[0].kind != URT_SEG_HERMITE && st.s >= st.seg[0].len) {
-        const double over = st.s - st.seg[0].len;
-        next_piece(e, st);
-        st.s = st.seg[0].kind == URT_SEG_HERMITE ? (st.sd > 0.0 ? over / st.sd : 0.0) : over;
-      }
+      pass_covered_pieces(e, st);
     }
   }
   if (!place(e, st)) {

@@ -156,12 +156,14 @@ static void test_optimovej__full_fractions_stay_within_the_torques(void **state)
 
 /* URCL's motion sequence from 5.21 (its execute_motion_sequence test and instruction_executor
  * example): movej, movel t=2, movel t=2 r=0.1, optimovej r=0.1, optimovel to rest, each sent as
- * the program would, once the one before is done (early, inside its blend zone). The optimovel
- * must brake to rest: its last period's step to zero joint speed is at most what the discrete
- * braking leaves (about 2 a T, a the deceleration it brakes at), not a jump from speed. Before,
- * the path, held at braking no faster than the last tick's acceleration, reached its end at
- * speed: wrist 2 went from 0.41 rad/s to rest in one period (206 rad/s², 8 times its braking). */
-static void test_optimovel__a_sequence_ends_braked_to_rest(void **state) {
+ * the program would, once the one before is done (early, inside its blend zone). The pieces
+ * hand over without a step in the joints' speeds, and the optimovel brakes to rest: its last
+ * period's step to zero joint speed is at most what braking in whole periods leaves (a T, a the
+ * deceleration it brakes at), not a jump from speed. Before, the path, held at braking no
+ * faster than the last tick's acceleration, reached its end at speed (wrist 2 from 0.41 rad/s
+ * to rest in one period: 206 rad/s², 8 times its braking), and its end's limit √(2 a d), taken
+ * before each period's travel, left up to 3 a T. */
+static void test_optimovel__a_sequence_hands_over_smoothly_and_ends_braked_to_rest(void **state) {
   (void)state;
   const double fr[2][2] = {{0.4, 0.7}, {1.0, 1.0}};
   for (int k = 0; k < 2; k++) {
@@ -184,30 +186,48 @@ static void test_optimovel__a_sequence_ends_braked_to_rest(void **state) {
     seq[3].v = fr[k][1];
     seq[3].r = 0.1;
     seq[4] = rig_tool_move(&r, URT_CTRL_OPTIMOVEL, l1, fr[k][0], fr[k][1], 0.0);
-    // the accelerations of the last 50 ms before the arrival: the braking
-    enum { kLast = 25 };
-    double qdd[kLast][URT_NJ], last_qd[URT_NJ] = {0};
-    memset(qdd, 0, sizeof qdd);
+    enum { kMax = 10000, kLast = 25 };
+    double(*qdd)[URT_NJ] = calloc(kMax, sizeof *qdd);
+    double last_qd[URT_NJ] = {0};
     int next = 0, n = 0;
-    for (int i = 0; i < 10000; i++) {
+    for (int i = 0; i < kMax; i++) {
       const urt_ctrl_cmd_t *cmd = NULL;
       if (next < 5 && (next == 0 || r.c->motion_done_id >= seq[next - 1].id)) cmd = &seq[next++];
       memcpy(last_qd, r.c->qd1, sizeof last_qd);
       rig_period(&r, cmd);
       assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
       if (next == 5 && r.c->motion_done_id >= seq[4].id) break;
-      memcpy(qdd[n++ % kLast], r.c->qdd1, sizeof qdd[0]);
+      memcpy(qdd[n++], r.c->qdd1, sizeof qdd[0]);
     }
-    assert_true(next == 5 && r.c->motion_done_id >= seq[4].id);
+    assert_true(next == 5 && r.c->motion_done_id >= seq[4].id && n > kLast);
+    // no period's acceleration stands alone: where one piece hands over to the next (a blend
+    // to the move after it) the joints' speeds run on, not step. Before, a blend followed by a
+    // piece shorter than one period's travel (optimovej between its two blends) was placed
+    // beyond that piece's end, and the next blend pulled the arm back: wrist 2 at 128 rad/s²
+    // between periods at 2 and 14.
+    double spike = 0.0;
+    for (int i = 1; i + 1 < n; i++) {
+      for (int j = 0; j < URT_NJ; j++) {
+        const double around = fmax(fabs(qdd[i - 1][j]), fabs(qdd[i + 1][j]));
+        spike = fmax(spike, fabs(qdd[i][j]) - 2.0 * around);
+      }
+    }
+    print_message("fractions %.1f/%.1f: largest acceleration beyond twice its neighbours' %.2f "
+                  "rad/s²\n", fr[k][0], fr[k][1], spike);
+    assert_true(spike < 5.0);
+    // the accelerations of the last 50 ms before the arrival: the braking
     double brake[URT_NJ] = {0};
-    for (int i = 0; i < kLast; i++) {
+    for (int i = n - kLast; i < n; i++) {
       for (int j = 0; j < URT_NJ; j++) brake[j] = fmax(brake[j], fabs(qdd[i][j]));
     }
+    free(qdd);
     for (int j = 0; j < URT_NJ; j++) {
       const double step = fabs(last_qd[j]) / r.c->period;
       print_message("fractions %.1f/%.1f: joint %d steps to rest at %.1f rad/s², its braking "
                     "in the last 50 ms %.1f\n", fr[k][0], fr[k][1], j, step, brake[j]);
-      assert_true(step <= 2.2 * brake[j] + 1e-9);
+      // braking in whole periods of a·T leaves at most a·T for the last one; an optimovel's
+      // a changes along the line (a fifth more here)
+      assert_true(step <= 1.2 * brake[j] + 1e-9);
     }
     rig_free(&r);
   }
@@ -570,7 +590,7 @@ int main(void) {
       cmocka_unit_test(test_optimovej__fractions_of_the_joint_limits_set_the_time),
       cmocka_unit_test(test_optimovej__fractions_outside_0_1_are_refused),
       cmocka_unit_test(test_optimovej__full_fractions_stay_within_the_torques),
-      cmocka_unit_test(test_optimovel__a_sequence_ends_braked_to_rest),
+      cmocka_unit_test(test_optimovel__a_sequence_hands_over_smoothly_and_ends_braked_to_rest),
       cmocka_unit_test(test_speedj__a_late_program_stream_ends_where_the_on_time_one_does),
       cmocka_unit_test(test_speedj__runs_on_while_the_program_is_behind),
       cmocka_unit_test(test_speedj__a_goal_beyond_the_limits_is_scaled_down_to_them),
