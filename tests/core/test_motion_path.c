@@ -194,6 +194,84 @@ static void test_movep__constant_tool_speed_through_a_circular_blend(void **stat
   corner(URT_CTRL_MOVEP, 0.2, 0.03, 0.1, 0.03);
 }
 
+/* the tool's angular velocity between two recorded set-points i-1, i (base frame) [rad/s] */
+static void angular_velocity(const rec_t *k, int i, double dt, double w[3]) {
+  const double *A = k->R[i], *B = k->R[i - 1];
+  double D[9];  // A B^T
+  for (int r = 0; r < 3; r++) {
+    for (int c = 0; c < 3; c++) {
+      D[3 * r + c] = A[3 * r] * B[3 * c] + A[3 * r + 1] * B[3 * c + 1] + A[3 * r + 2] * B[3 * c + 2];
+    }
+  }
+  const double cth = fmax(-1.0, fmin(1.0, 0.5 * (D[0] + D[4] + D[8] - 1.0)));
+  const double th = acos(cth), f = th > 1e-12 ? th / (2.0 * sin(th)) : 0.5;
+  w[0] = f * (D[7] - D[5]) / dt;
+  w[1] = f * (D[2] - D[6]) / dt;
+  w[2] = f * (D[3] - D[1]) / dt;
+}
+
+/* A movel that turns the tool (0.6 rad about the base z while it runs 0.2 m along x) blends
+ * (r = 0.05) into one that only translates (0.2 m along y): the blend turns the tool from A's
+ * angular velocity to B's (none) without a step. Before, the blend turned it at one constant
+ * rate of its own, so the angular velocity stepped where the blend began and where it ended. */
+static void test_blend__a_turning_line_into_a_straight_one_turns_the_tool_without_a_step(
+    void **state) {
+  (void)state;
+  rig_t r = rig_new(urt_test_quiet, 0.002, 1);
+  go_work(&r);
+  static rec_t k;
+  k.n = 0;
+  k.qdd_max = 0.0;
+  double p0[6], via[6], to[6], R0[9];
+  tcp_set(&r, p0);
+  rotm(p0, R0);
+  // the tool turned 0.6 rad about the base z: rotation vector of Rz(0.6)·R0
+  const double c = cos(0.6), sn = sin(0.6);
+  double R1[9];
+  for (int j = 0; j < 3; j++) {
+    R1[j] = c * R0[j] - sn * R0[3 + j];
+    R1[3 + j] = sn * R0[j] + c * R0[3 + j];
+    R1[6 + j] = R0[6 + j];
+  }
+  const double th = acos(fmax(-1.0, fmin(1.0, 0.5 * (R1[0] + R1[4] + R1[8] - 1.0))));
+  const double f = th / (2.0 * sin(th));
+  memcpy(via, p0, sizeof via);
+  via[0] += 0.2;
+  via[3] = f * (R1[7] - R1[5]);
+  via[4] = f * (R1[2] - R1[6]);
+  via[5] = f * (R1[3] - R1[1]);
+  memcpy(to, via, sizeof to);
+  to[1] += 0.2;
+  urt_ctrl_cmd_t a = rig_tool_move(&r, URT_CTRL_MOVEL, via, 1.2, 0.25, 0.05);
+  urt_ctrl_cmd_t b = rig_tool_move(&r, URT_CTRL_MOVEL, to, 1.2, 0.25, 0.0);
+  run_cmd(&r, &a, &k, 0);
+  run_cmd(&r, &b, &k, 1);
+  // the largest change of the angular velocity from one period to the next, and A's own rate
+  double w_prev[3], w[3], step = 0.0, w_max = 0.0;
+  angular_velocity(&k, 1, 0.002, w_prev);
+  for (int i = 2; i < k.n; i++) {
+    angular_velocity(&k, i, 0.002, w);
+    const double dw = sqrt((w[0] - w_prev[0]) * (w[0] - w_prev[0]) +
+                           (w[1] - w_prev[1]) * (w[1] - w_prev[1]) +
+                           (w[2] - w_prev[2]) * (w[2] - w_prev[2]));
+    step = fmax(step, dw);
+    w_max = fmax(w_max, sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]));
+    memcpy(w_prev, w, sizeof w);
+  }
+  print_message("turning movel into a straight one: angular speed up to %.3f rad/s, its largest "
+                "change in one period %.4f rad/s (%.1f rad/s²); joints' largest acceleration "
+                "%.1f rad/s²\n", w_max, step, step / 0.002, k.qdd_max);
+  // A turns at 0.6 rad / 0.2 m · 0.25 m/s = 0.75 rad/s and accelerates with the tool at
+  // 1.2 m/s² (4.5 rad/s², 0.009 rad/s a period); a step is a good part of the 0.75
+  assert_true(w_max > 0.7);
+  assert_true(step < 0.05);
+  assert_true(k.qdd_max < 20.0);  // and so do the joints (before: 238 rad/s²)
+  double end[6];
+  tcp_set(&r, end);
+  assert_true(dist3(end, to) < 1e-8);
+  rig_free(&r);
+}
+
 static void test_blend__movej_passes_within_r_without_stopping(void **state) {
   (void)state;
   rig_t r = rig_new(urt_test_quiet, 0.002, 1);
@@ -534,6 +612,7 @@ int main(void) {
       cmocka_unit_test(test_blend__movel_corner_is_the_arc_tangent_to_both_lines),
       cmocka_unit_test(test_blend__radius_over_half_the_segment_shrinks_to_half),
       cmocka_unit_test(test_movep__constant_tool_speed_through_a_circular_blend),
+      cmocka_unit_test(test_blend__a_turning_line_into_a_straight_one_turns_the_tool_without_a_step),
       cmocka_unit_test(test_blend__movej_passes_within_r_without_stopping),
       cmocka_unit_test(test_blend__movej_into_movel),
       cmocka_unit_test(test_blend__movel_into_movej),

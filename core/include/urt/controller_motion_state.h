@@ -88,7 +88,9 @@ enum { URT_SEG_JOINT = 1, URT_SEG_LINE = 2, URT_SEG_ARC = 3, URT_SEG_HERMITE = 4
 typedef struct urt_path_seg {
   int32_t kind;                  /* URT_SEG_*                                                */
   int32_t move;                  /* the move it belongs to (index into urt_path_state_t.move) */
-  int32_t orient;                /* 0 interpolated, 1 fixed relative to the arc's tangent     */
+  int32_t orient;                /* 0 interpolated, 1 fixed relative to the arc's tangent, 2 a
+                                    tool blend's: a cubic rotation vector whose rates at the ends
+                                    (body, per unit path) are qd0[0..2] and qd1[0..2]         */
   int32_t pad_;
   double s0, len, L;             /* offset into the geometry, length run, geometry's length  */
   double v_max;                  /* path speed limit on it [m/s or rad/s]                     */
