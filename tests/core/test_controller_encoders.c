@@ -25,14 +25,6 @@ static void install(rig_t *r, const urt_fault_spec_t *f) {
   fault_install(r->m, r->d, f, f ? 1 : 0);
 }
 
-static urt_ctrl_cmd_t movej_to(rig_t *r, const double q[6], double a, double v) {
-  urt_ctrl_cmd_t c = rig_cmd(r, URT_CTRL_MOVEJ);
-  memcpy(c.q, q, sizeof c.q);
-  c.a = a;
-  c.v = v;
-  return c;
-}
-
 static bool encoder_stopped(const rig_t *r) {
   return r->c->safety_mode == URT_SAFETY_MODE_PROTECTIVE_STOP &&
          (r->c->fault & URT_CTRL_FAULT_ENCODER) && (r->d->pstop & URT_PSTOP_ENCODER);
@@ -59,7 +51,7 @@ static void test_encoders__a_joint_encoder_stuck_while_moving_stops_the_arm(void
   double q[6];
   for (int j = 0; j < 6; j++) q[j] = r.c->q1[j];
   q[0] += 1.0;
-  urt_ctrl_cmd_t mv = movej_to(&r, q, 4.0, 1.0);
+  urt_ctrl_cmd_t mv = rig_movej(&r, q, 4.0, 1.0);
   double t = run_until_stopped(&r, &mv, 2.0);
   assert_true(t > 0.3);
   assert_int_equal(r.c->enc_joint, 0);
@@ -70,7 +62,7 @@ static void test_encoders__a_joint_encoder_stuck_while_moving_stops_the_arm(void
                 t - 0.3, ahead);
   assert_true(ahead > URT_ENCODER_TOLERANCE - 0.005 && ahead < URT_ENCODER_TOLERANCE + 0.02);
   // no motion is accepted while stopped
-  urt_ctrl_cmd_t again = movej_to(&r, q, 4.0, 1.0);
+  urt_ctrl_cmd_t again = rig_movej(&r, q, 4.0, 1.0);
   rig_period(&r, &again);
   assert_true(r.c->fault & URT_CTRL_FAULT_NOT_RUNNING);
   rig_free(&r);
@@ -104,9 +96,9 @@ static void test_encoders__healthy_and_worn_gears_run_without_a_stop(void **stat
     double q0[6], q[6];
     for (int j = 0; j < 6; j++) q0[j] = q[j] = r.c->q1[j];
     for (int j = 0; j < 6; j++) q[j] += (j == 1 ? -0.8 : 1.0);
-    urt_ctrl_cmd_t there = movej_to(&r, q, 8.0, 3.0);
+    urt_ctrl_cmd_t there = rig_movej(&r, q, 8.0, 3.0);
     assert_true(run_until_stopped(&r, &there, 3.0) < 0);
-    urt_ctrl_cmd_t back = movej_to(&r, q0, 8.0, 3.0);
+    urt_ctrl_cmd_t back = rig_movej(&r, q0, 8.0, 3.0);
     assert_true(run_until_stopped(&r, &back, 3.0) < 0);
     assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
     // back where it began (the worn shoulder sags 0.014 rad under gravity at its 4 %)

@@ -16,14 +16,6 @@
 
 static const char *const kQuiet[] = {"sensors.noise=false", NULL};
 
-static urt_ctrl_cmd_t movej_to(rig_t *r, const double q[6], double a, double v) {
-  urt_ctrl_cmd_t c = rig_cmd(r, URT_CTRL_MOVEJ);
-  memcpy(c.q, q, sizeof c.q);
-  c.a = a;
-  c.v = v;
-  return c;
-}
-
 static bool joint_faulted(const rig_t *r) {
   return r->c->safety_mode == URT_SAFETY_MODE_FAULT && (r->c->fault & URT_CTRL_FAULT_JOINT);
 }
@@ -77,7 +69,7 @@ static void test_overcurrent__a_brake_dragging_at_the_joints_peak_torque_faults_
   double q[6], q5 = r.d->x[5][URT_X_Q];
   for (int j = 0; j < 6; j++) q[j] = r.c->q1[j];
   q[5] += 1.0;
-  urt_ctrl_cmd_t mv = movej_to(&r, q, 4.0, 1.0);
+  urt_ctrl_cmd_t mv = rig_movej(&r, q, 4.0, 1.0);
   run_t run = run_watching(&r, &mv, 5, 3.0);
   print_message("wrist 3 at its limit from %.3f s, faulted at %.3f s, turned %.4f rad\n",
                 run.t_sat, run.t_fault, r.d->x[5][URT_X_Q] - q5);
@@ -98,7 +90,7 @@ static void test_overcurrent__a_brake_dragging_at_the_joints_peak_torque_faults_
   }
 
   // off until the safety system restarts: motion, power on and brake release are refused
-  urt_ctrl_cmd_t again = movej_to(&r, q, 4.0, 1.0);
+  urt_ctrl_cmd_t again = rig_movej(&r, q, 4.0, 1.0);
   rig_period(&r, &again);
   assert_true(r.c->fault & URT_CTRL_FAULT_NOT_RUNNING);
   urt_ctrl_cmd_t on = rig_cmd(&r, URT_CTRL_POWER_ON), rel = rig_cmd(&r, URT_CTRL_BRAKE_RELEASE);
@@ -124,7 +116,7 @@ static void test_overcurrent__a_brake_dragging_at_the_joints_peak_torque_faults_
   assert_true(run.t_fault < 0.0);
   for (int j = 0; j < 6; j++) q[j] = r.c->q1[j];
   q[4] += 0.3;
-  mv = movej_to(&r, q, 4.0, 1.0);
+  mv = rig_movej(&r, q, 4.0, 1.0);
   run = run_watching(&r, &mv, 4, 1.5);
   assert_true(run.t_fault < 0.0);
   assert_true(fabs(r.d->x[4][URT_X_Q] - q[4]) < 1e-3);
@@ -140,14 +132,14 @@ static void test_overcurrent__a_drag_the_joint_can_overcome_and_fast_moves_do_no
   double q[6];
   for (int j = 0; j < 6; j++) q[j] = r.c->q1[j];
   q[5] += 1.0;
-  urt_ctrl_cmd_t mv = movej_to(&r, q, 4.0, 1.0);
+  urt_ctrl_cmd_t mv = rig_movej(&r, q, 4.0, 1.0);
   run_t run = run_watching(&r, &mv, 5, 2.5);
   assert_true(run.t_fault < 0.0);
   assert_true(fabs(r.d->x[5][URT_X_Q] - q[5]) < 1e-3);
   assert_true(r.c->oc_time_max[5] == 0.0);  // 10 + friction < 28 N m: never at the limit
   // every joint at once, at 3 rad/s² and 3 rad/s (faster than the movej defaults)
   for (int j = 0; j < 6; j++) q[j] += j < 3 ? -1.0 : 1.5;
-  mv = movej_to(&r, q, 3.0, 3.0);
+  mv = rig_movej(&r, q, 3.0, 3.0);
   double longest = 0.0;
   for (int j = 0; j < 6; j++) {
     run = run_watching(&r, j == 0 ? &mv : NULL, j, j == 0 ? 3.0 : 0.002);

@@ -64,6 +64,14 @@ urt_ctrl_cmd_t rig_cmd(rig_t *r, int kind) {
   return c;
 }
 
+urt_ctrl_cmd_t rig_movej(rig_t *r, const double q[6], double a, double v) {
+  urt_ctrl_cmd_t c = rig_cmd(r, URT_CTRL_MOVEJ);
+  memcpy(c.q, q, sizeof c.q);
+  c.a = a;
+  c.v = v;
+  return c;
+}
+
 urt_ctrl_cmd_t rig_tool_move(rig_t *r, int kind, const double pose[6], double a, double v,
                              double rad) {
   urt_ctrl_cmd_t c = rig_cmd(r, kind);

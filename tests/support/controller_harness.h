@@ -34,6 +34,9 @@ void tcp_actual(const rig_t *r, double pose[6]);
 /* A command of this kind with the rig's next motion id, every other field 0. */
 urt_ctrl_cmd_t rig_cmd(rig_t *r, int kind);
 
+/* A movej to joint positions q with acceleration a and speed v. */
+urt_ctrl_cmd_t rig_movej(rig_t *r, const double q[6], double a, double v);
+
 /* A tool-space motion (movel, movep, optimovel, …) to pose with acceleration a, speed v and
  * blend radius rad. */
 urt_ctrl_cmd_t rig_tool_move(rig_t *r, int kind, const double pose[6], double a, double v,

@@ -21,6 +21,19 @@ typedef struct script_run {
   int version[3];  /* the controller's software version (all 0: the newest) */
 } script_run;
 
+/* a fresh run on a fresh fake host (a CMocka setup's body) */
+static inline void sr_reset(script_run *r) {
+  memset(r, 0, sizeof *r);
+  fake_init(&r->f, &r->host);
+}
+
+/* the emulated controller's software version */
+static inline void sr_version(script_run *r, int major, int minor, int bugfix) {
+  r->version[0] = major;
+  r->version[1] = minor;
+  r->version[2] = bugfix;
+}
+
 /* parse and run; returns urt__us_run's result (the error in r->err) */
 static inline int sr_run(script_run *r, const char *text) {
   us_prog *p = NULL;
@@ -36,6 +49,12 @@ static inline int sr_run(script_run *r, const char *text) {
 
 static inline void sr_must(script_run *r, const char *text) {
   if (sr_run(r, text) != 0) fail_msg("run: %u:%u %s", r->err.line, r->err.column, r->err.text);
+}
+
+/* run text, which must fail with an error containing part */
+static inline void sr_fails_with(script_run *r, const char *text, const char *part) {
+  assert_int_not_equal(sr_run(r, text), 0);
+  if (!strstr(r->err.text, part)) fail_msg("error \"%s\" lacks \"%s\"", r->err.text, part);
 }
 
 /* the numbers in message k ("p[1,2]", "[1,2]", "3"), at most n; returns how many */

@@ -9,15 +9,9 @@
 static script_run R;
 
 static int setup(void **state) {
-  memset(&R, 0, sizeof R);
-  fake_init(&R.f, &R.host);
+  (void)state;
+  sr_reset(&R);
   return 0;
-}
-
-static void version(int major, int minor, int bugfix) {
-  R.version[0] = major;
-  R.version[1] = minor;
-  R.version[2] = bugfix;
 }
 
 /* the last command the controller got, which must be a TORQUE */
@@ -28,33 +22,28 @@ static const urt_ctrl_cmd_t *torque_cmd(void) {
   return c;
 }
 
-static void expect_fails_with(const char *text, const char *part) {
-  assert_int_not_equal(sr_run(&R, text), 0);
-  if (!strstr(R.err.text, part)) fail_msg("error \"%s\" lacks \"%s\"", R.err.text, part);
-}
-
 static void test_modes__direct_torque_is_unknown_before_5_23_and_on_cb3(void **state) {
-  version(5, 19, 0);
-  expect_fails_with("direct_torque([0,0,0,0,0,0])\n", "5.23");
-  version(3, 15, 8);
-  expect_fails_with("direct_torque([0,0,0,0,0,0])\n", "5.23");
+  sr_version(&R, 5, 19, 0);
+  sr_fails_with(&R, "direct_torque([0,0,0,0,0,0])\n", "5.23");
+  sr_version(&R, 3, 15, 8);
+  sr_fails_with(&R, "direct_torque([0,0,0,0,0,0])\n", "5.23");
   assert_int_equal(R.f.n_cmd, 0);
 }
 
 static void test_modes__direct_torque_5_23_takes_friction_comp(void **state) {
-  version(5, 23, 0);
+  sr_version(&R, 5, 23, 0);
   sr_must(&R, "direct_torque([1,2,3,4,5,6])\n");
   const urt_ctrl_cmd_t *c = torque_cmd();
   assert_int_equal(c->index, 1);  // friction_comp defaults to True: the whole model
   for (int j = 0; j < 6; j++) assert_true(c->tau[j] == j + 1.0);
   sr_must(&R, "direct_torque([0,0,0,0,0,0], friction_comp=False)\n");
   assert_int_equal(torque_cmd()->index, 0);
-  expect_fails_with("direct_torque([0,0,0,0,0,0], viscous_scale=[0,0,0,0,0,0])\n", "5.25.1");
+  sr_fails_with(&R, "direct_torque([0,0,0,0,0,0], viscous_scale=[0,0,0,0,0,0])\n", "5.25.1");
 }
 
 static void test_modes__direct_torque_5_25_1_scales_with_the_manuals_defaults(void **state) {
   static const double visc[6] = {0.9, 0.9, 0.8, 0.9, 0.9, 0.9}, coul[6] = {0.8, 0.8, 0.7, 0.8, 0.8, 0.8};
-  version(5, 25, 1);
+  sr_version(&R, 5, 25, 1);
   sr_must(&R, "direct_torque([0,0,0,0,0,0])\n");
   const urt_ctrl_cmd_t *c = torque_cmd();
   assert_int_equal(c->index, 2);
@@ -73,9 +62,9 @@ static void test_modes__direct_torque_5_25_1_scales_with_the_manuals_defaults(vo
   sr_must(&R, "direct_torque([0,0,0,0,0,0], friction_comp=True)\n");
   assert_int_equal(torque_cmd()->index, 1);
   // a scale outside [0, 1] is refused
-  expect_fails_with("direct_torque([0,0,0,0,0,0], viscous_scale=[0,0,0,0,0,1.5])\n", "[0, 1]");
+  sr_fails_with(&R, "direct_torque([0,0,0,0,0,0], viscous_scale=[0,0,0,0,0,1.5])\n", "[0, 1]");
   // the newest version (all 0) is the same
-  version(0, 0, 0);
+  sr_version(&R, 0, 0, 0);
   sr_must(&R, "direct_torque([0,0,0,0,0,0])\n");
   assert_int_equal(torque_cmd()->index, 2);
 }

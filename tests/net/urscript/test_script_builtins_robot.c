@@ -8,20 +8,8 @@ static script_run R;
 
 static int setup(void **state) {
   (void)state;
-  memset(&R, 0, sizeof R);
-  fake_init(&R.f, &R.host);
+  sr_reset(&R);
   return 0;
-}
-
-static void version(int major, int minor, int bugfix) {
-  R.version[0] = major;
-  R.version[1] = minor;
-  R.version[2] = bugfix;
-}
-
-static void expect_fails_with(const char *text, const char *part) {
-  assert_int_not_equal(sr_run(&R, text), 0);
-  if (!strstr(R.err.text, part)) fail_msg("error \"%s\" lacks \"%s\"", R.err.text, part);
 }
 
 static const char kOptimovej[] = "optimovej([0.1, -1.5, 1.2, -1.0, -1.5, 0.0])\n";
@@ -29,13 +17,13 @@ static const char kOptimovel[] = "optimovel(p[0.3, -0.2, 0.4, 0, 3.14, 0])\n";
 
 static void test_robot__optimove_is_unknown_before_5_21_and_on_cb3(void **state) {
   (void)state;
-  version(5, 19, 0);
-  expect_fails_with(kOptimovej, "optimovej is not available on software 5.19.0 (UR added it in 5.21)");
-  expect_fails_with(kOptimovel, "optimovel is not available on software 5.19.0 (UR added it in 5.21)");
-  version(5, 20, 9);
-  expect_fails_with(kOptimovej, "5.21");
-  version(3, 15, 8);
-  expect_fails_with(kOptimovel, "5.21");
+  sr_version(&R, 5, 19, 0);
+  sr_fails_with(&R, kOptimovej, "optimovej is not available on software 5.19.0 (UR added it in 5.21)");
+  sr_fails_with(&R, kOptimovel, "optimovel is not available on software 5.19.0 (UR added it in 5.21)");
+  sr_version(&R, 5, 20, 9);
+  sr_fails_with(&R, kOptimovej, "5.21");
+  sr_version(&R, 3, 15, 8);
+  sr_fails_with(&R, kOptimovel, "5.21");
   assert_int_equal(R.f.n_cmd, 0);  // nothing reached the controller
 }
 
@@ -43,7 +31,7 @@ static void test_robot__optimove_from_5_21_with_the_manuals_defaults(void **stat
   (void)state;
   const int versions[][3] = {{5, 21, 0}, {5, 25, 1}, {0, 0, 0}};  // 0.0.0: the newest
   for (int k = 0; k < 3; k++) {
-    version(versions[k][0], versions[k][1], versions[k][2]);
+    sr_version(&R, versions[k][0], versions[k][1], versions[k][2]);
     R.f.n_cmd = 0;
     sr_must(&R, kOptimovej);
     sr_must(&R, kOptimovel);
