@@ -158,6 +158,13 @@ void hold_at(urt_ctrl_t* c, const Vec6& q) noexcept {
   std::memset(c->qdd1, 0, sizeof c->qdd1);
 }
 
+// the arm powered off: the motion ends and the set-point holds where the arm is
+void power_off(urt_ctrl_t* c, const urt_data_t* d) noexcept {
+  finish_motion(c);
+  c->robot_mode = URT_ROBOT_MODE_POWER_OFF;
+  hold_at(c, measured_q(d));
+}
+
 void protective_stop(urt_ctrl_t* c, urt_data_t* d, uint32_t fault, uint32_t pstop_bits) noexcept {
   c->fault |= fault;
   c->safety_mode = URT_SAFETY_MODE_PROTECTIVE_STOP;
@@ -381,9 +388,7 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
       }
       break;
     case URT_CTRL_POWER_OFF:
-      finish_motion(c);
-      c->robot_mode = URT_ROBOT_MODE_POWER_OFF;
-      hold_at(c, measured_q(d));
+      power_off(c, d);
       break;
     case URT_CTRL_BRAKE_RELEASE:
       if (c->safety_mode == URT_SAFETY_MODE_FAULT) {
@@ -406,11 +411,9 @@ void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
     case URT_CTRL_RESTART_SAFETY:
       // the way out of a joint fault: NORMAL, still powered off (power on, brake release next)
       if (c->safety_mode == URT_SAFETY_MODE_FAULT) {
-        finish_motion(c);
-        c->robot_mode = URT_ROBOT_MODE_POWER_OFF;
+        power_off(c, d);
         c->safety_mode = URT_SAFETY_MODE_NORMAL;
         c->fault_joint = -1;
-        hold_at(c, measured_q(d));
       }
       break;
     case URT_CTRL_PROGRAM_STATE:
@@ -609,9 +612,7 @@ void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
     c->fault |= URT_CTRL_FAULT_JOINT;
     c->fault_joint = oc;
     c->safety_mode = URT_SAFETY_MODE_FAULT;
-    c->robot_mode = URT_ROBOT_MODE_POWER_OFF;
-    finish_motion(c);
-    hold_at(c, measured_q(d));
+    power_off(c, d);
   }
   if (!running(c)) {
     c->torque_mask = c->torque_mask_last = 0;
