@@ -111,7 +111,8 @@ int tick_encoder_check(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d,
 
 // ---- the over-current check (controller_overcurrent.cpp) ----
 
-// Time each joint's drive asking for its current limit (|i_ref| at i_max) while the arm runs
+// Time each joint's drive asking for its current limit (|d->i_ref| at i_max, the outputs of the
+// state the tick starts from) while the arm runs
 // (run); the first joint that has done so for URT_OVERCURRENT_TIME without a break, or −1.
 // While it does not run the times restart. Once per period, before the motions; the caller
 // faults the joint. Context: RT.

@@ -11,10 +11,11 @@
 // outside (a collision wrench, a payload heavier than the joint can lift) or in the joint (a
 // dragging brake, a weakened motor, a seized gear).
 //
-// The current reference is the drive's at the end of the last period (the state the tick
-// starts from), evaluated here from the state rather than read from the outputs, which only
-// a snapshot refreshes. A torque-mode joint's reference is its command, which the controller
-// keeps within torque_max: one commanded at its very limit for that long counts as well.
+// The current reference is the drive's output d->i_ref at the end of the last period (the
+// state the tick starts from): the loop's snapshot (urt_snapshot_fill) and the replay's
+// sampling refresh the outputs at every period's end (urt_ctrl_tick's contract), so it is not
+// evaluated twice. A torque-mode joint's reference is its command, which the controller keeps
+// within torque_max: one commanded at its very limit for that long counts as well.
 // No allocation. Context: RT.
 #include <cmath>
 
@@ -31,17 +32,12 @@ int tick_overcurrent_check(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t
       c->oc_time[j] = 0.0;
       continue;
     }
-    double f[URT_NXJ];
-    JointAux aux;
-    joint_rates(m, d, j, 0.0, d->x[j], f, &aux);
-    // the reference is clamped to exactly ±i_max when saturated; a millionth below it is
-    // not a limit a tracking loop reaches by chance
-    // (a fault's drive parameters, where the joint has one: the limit the drive clamps to)
+    // the reference is clamped to exactly ±i_max when saturated (a fault's drive parameters,
+    // where the joint has one); a millionth below it is not a limit a loop reaches by chance
     const urt_fault_joint_t* fj = joint_fault(d, j);
     const double i_max = (fj ? fj->control : m->control[j]).i_max;
-    const bool at_limit = std::fabs(aux.i_ref) >= i_max * (1.0 - 1e-6);
+    const bool at_limit = std::fabs(d->i_ref[j]) >= i_max * (1.0 - 1e-6);
     c->oc_time[j] = at_limit ? c->oc_time[j] + c->period : 0.0;
-    c->oc_time_max[j] = std::fmax(c->oc_time_max[j], c->oc_time[j]);
     // a millionth of a period below: whole periods summed in floating point
     if (tripped < 0 && c->oc_time[j] >= URT_OVERCURRENT_TIME - 1e-6 * c->period) {
       tripped = j;

@@ -20,39 +20,50 @@ static bool joint_faulted(const rig_t *r) {
   return r->c->safety_mode == URT_SAFETY_MODE_FAULT && (r->c->fault & URT_CTRL_FAULT_JOINT);
 }
 
-/* whether joint j's drive asks for its current limit now (the outputs at the period's end,
- * as a snapshot reads them) */
-static bool at_limit(rig_t *r, int j) {
+/* One controller period as the loop runs it: the command, tick and physics steps, then the
+ * outputs of the new state (the loop's snapshot refreshes them; the tick's check reads them). */
+static void period(rig_t *r, const urt_ctrl_cmd_t *cmd) {
+  rig_period(r, cmd);
   urt_data_update_outputs(r->m, r->d);
+}
+
+static void periods_for(rig_t *r, double t) {
+  for (int i = 0, n = (int)lround(t / r->c->period); i < n; i++) period(r, NULL);
+}
+
+/* whether joint j's drive asks for its current limit now (the outputs at the period's end) */
+static bool at_limit(const rig_t *r, int j) {
   return fabs(r->d->i_ref[j]) >= r->m->control[j].i_max * (1.0 - 1e-6);
 }
 
 typedef struct {
-  double t_fault;      /* when the joint faulted [s], −1: not within the run */
-  double t_sat;        /* when joint j's drive last began to ask for its limit [s], −1: never */
-  double sat_longest;  /* the longest stretch at the limit the test saw [s] */
+  double t_fault;              /* when a joint faulted [s], −1: not within the run */
+  double t_sat;                /* when joint j's drive last began to ask for its limit [s], −1 */
+  double sat_longest[URT_NJ];  /* each joint's longest stretch at its limit the test saw [s] */
 } run_t;
 
 /* periods (the first with cmd) until a joint faults or max_t [s] passes, watching joint j */
 static run_t run_watching(rig_t *r, const urt_ctrl_cmd_t *cmd, int j, double max_t) {
-  run_t out = {-1.0, -1.0, 0.0};
+  run_t out = {-1.0, -1.0, {0.0}};
+  double since[URT_NJ] = {0.0};
   int n = (int)lround(max_t / r->c->period);
-  bool was = false;
   for (int i = 0; i < n; i++) {
-    rig_period(r, i == 0 ? cmd : NULL);
+    bool was[URT_NJ];
+    for (int k = 0; k < URT_NJ; k++) was[k] = at_limit(r, k);
+    period(r, i == 0 ? cmd : NULL);
     double t = (i + 1) * r->c->period;
     if (joint_faulted(r)) {
       out.t_fault = t;
       return out;
     }
-    bool now = at_limit(r, j);
-    if (now && !was) {
-      out.t_sat = t;
+    for (int k = 0; k < URT_NJ; k++) {
+      if (!at_limit(r, k)) continue;
+      if (!was[k] || i == 0) {
+        since[k] = t;
+        if (k == j) out.t_sat = t;
+      }
+      out.sat_longest[k] = fmax(out.sat_longest[k], t - since[k] + r->c->period);
     }
-    if (now) {
-      out.sat_longest = fmax(out.sat_longest, t - out.t_sat + r->c->period);
-    }
-    was = now;
   }
   return out;
 }
@@ -64,7 +75,7 @@ static void test_overcurrent__a_brake_dragging_at_the_joints_peak_torque_faults_
   // current limit, cannot turn it; the controller's model does not know the drag
   urt_fault_spec_t f = fault_spec(URT_FAULT_BRAKE_DRAG, 5, 28.0);
   fault_install(r.m, r.d, &f, 1);
-  run_for(&r, 0.5);  // standing still the drag carries no load: no fault
+  periods_for(&r, 0.5);  // standing still the drag carries no load: no fault
   assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
   double q[6], q5 = r.d->x[5][URT_X_Q];
   for (int j = 0; j < 6; j++) q[j] = r.c->q1[j];
@@ -91,15 +102,15 @@ static void test_overcurrent__a_brake_dragging_at_the_joints_peak_torque_faults_
 
   // off until the safety system restarts: motion, power on and brake release are refused
   urt_ctrl_cmd_t again = rig_movej(&r, q, 4.0, 1.0);
-  rig_period(&r, &again);
+  period(&r, &again);
   assert_true(r.c->fault & URT_CTRL_FAULT_NOT_RUNNING);
   urt_ctrl_cmd_t on = rig_cmd(&r, URT_CTRL_POWER_ON), rel = rig_cmd(&r, URT_CTRL_BRAKE_RELEASE);
-  rig_period(&r, &on);
-  rig_period(&r, &rel);
+  period(&r, &on);
+  period(&r, &rel);
   assert_int_equal(r.c->robot_mode, URT_ROBOT_MODE_POWER_OFF);
   assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_FAULT);
   urt_ctrl_cmd_t restart = rig_cmd(&r, URT_CTRL_RESTART_SAFETY);
-  rig_period(&r, &restart);
+  period(&r, &restart);
   assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
   assert_int_equal(r.c->robot_mode, URT_ROBOT_MODE_POWER_OFF);
   assert_int_equal(r.c->fault_joint, -1);
@@ -109,8 +120,8 @@ static void test_overcurrent__a_brake_dragging_at_the_joints_peak_torque_faults_
   // joint's move is taken and made
   on = rig_cmd(&r, URT_CTRL_POWER_ON);
   rel = rig_cmd(&r, URT_CTRL_BRAKE_RELEASE);
-  rig_period(&r, &on);
-  rig_period(&r, &rel);
+  period(&r, &on);
+  period(&r, &rel);
   assert_int_equal(r.c->robot_mode, URT_ROBOT_MODE_RUNNING);
   run = run_watching(&r, NULL, 5, 1.0);
   assert_true(run.t_fault < 0.0);
@@ -136,16 +147,14 @@ static void test_overcurrent__a_drag_the_joint_can_overcome_and_fast_moves_do_no
   run_t run = run_watching(&r, &mv, 5, 2.5);
   assert_true(run.t_fault < 0.0);
   assert_true(fabs(r.d->x[5][URT_X_Q] - q[5]) < 1e-3);
-  assert_true(r.c->oc_time_max[5] == 0.0);  // 10 + friction < 28 N m: never at the limit
+  assert_true(run.sat_longest[5] == 0.0);  // 10 + friction < 28 N m: never at the limit
   // every joint at once, at 3 rad/s² and 3 rad/s (faster than the movej defaults)
   for (int j = 0; j < 6; j++) q[j] += j < 3 ? -1.0 : 1.5;
   mv = rig_movej(&r, q, 3.0, 3.0);
+  run = run_watching(&r, &mv, 0, 3.0);
+  assert_true(run.t_fault < 0.0);
   double longest = 0.0;
-  for (int j = 0; j < 6; j++) {
-    run = run_watching(&r, j == 0 ? &mv : NULL, j, j == 0 ? 3.0 : 0.002);
-    assert_true(run.t_fault < 0.0);
-  }
-  for (int j = 0; j < 6; j++) longest = fmax(longest, r.c->oc_time_max[j]);
+  for (int j = 0; j < 6; j++) longest = fmax(longest, run.sat_longest[j]);
   print_message("longest stretch at a current limit: %.3f s\n", longest);
   assert_true(longest < URT_OVERCURRENT_TIME);
   assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
@@ -167,8 +176,8 @@ static void test_overcurrent__a_collision_shorter_than_the_time_runs_on_a_longer
   fault_install(r.m, r.d, &f, 1);
   run_t run = run_watching(&r, NULL, 1, 2.0);
   print_message("shoulder at its limit for up to %.3f s a window; fault at %.3f s\n",
-                run.sat_longest, run.t_fault);
-  assert_true(run.sat_longest > 0.05);  // the windows do saturate it
+                run.sat_longest[1], run.t_fault);
+  assert_true(run.sat_longest[1] > 0.05);  // the windows do saturate it
   assert_true(run.t_fault < 0.0);
   assert_int_equal(r.c->safety_mode, URT_SAFETY_MODE_NORMAL);
   // the same force held: a fault, at a joint whose drive was at its limit

@@ -322,9 +322,9 @@ typedef struct urt_ctrl {
   int32_t enc_joint;
 
   /* the over-current check (core/controller_overcurrent.cpp): per joint, how long its drive
-   * has asked for its current limit without a break [s], the longest such run since start
-   * [s], and the joint that faulted (−1: none; set with safety mode FAULT) */
-  double oc_time[URT_NJ], oc_time_max[URT_NJ];
+   * has asked for its current limit without a break [s], and the joint that faulted (−1:
+   * none; set with safety mode FAULT) */
+  double oc_time[URT_NJ];
   int32_t fault_joint;
 } urt_ctrl_t;
 
@@ -339,7 +339,9 @@ int urt_ctrl_init(const urt_model_t *m, urt_ctrl_t *c, const urt_data_t *d, doub
 void urt_ctrl_apply(const urt_model_t *m, urt_ctrl_t *c, urt_data_t *d, const urt_ctrl_cmd_t *cmd);
 
 /* Plan the next period: advance the motion generator by c->period, producing q1/qd1/qdd1.
- * Follows the physics' protective stop (d->pstop) into PROTECTIVE_STOP. Context: RT. */
+ * Follows the physics' protective stop (d->pstop) into PROTECTIVE_STOP. d's outputs must be
+ * those of its state (urt_data_update_outputs after the last period's steps, as the loop's
+ * snapshot does): the over-current check reads the drives' i_ref there. Context: RT. */
 void urt_ctrl_tick(const urt_model_t *m, urt_ctrl_t *c, urt_data_t *d);
 
 /* The drive command at physics step k (0..n_sub-1) of the current period. Context: RT. */
