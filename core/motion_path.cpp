@@ -62,8 +62,9 @@ double piece_vmax(const urt_path_state_t& st, int k) noexcept {
   return v;
 }
 
-// the path speed allowed now: the head piece's limit, what can still brake to every slower
-// piece ahead and to rest at the end
+// the path speed the pieces allow now: the head piece's limit and what can still brake to
+// every slower piece ahead; to_end is the path left to the end (HUGE_VAL: it goes on beyond a
+// blend into other units). Braking to rest at the end is rest_limit's.
 double speed_limit(const urt_path_state_t& st, double a, double& to_end) noexcept {
   double lim = piece_vmax(st, 0);
   double dist = st.seg[0].len - st.s;
@@ -76,7 +77,20 @@ double speed_limit(const urt_path_state_t& st, double a, double& to_end) noexcep
     dist += st.seg[k].len;
   }
   to_end = std::fmax(dist, 0.0);
-  return std::fmin(lim, std::sqrt(2.0 * a * to_end));
+  return lim;
+}
+
+// the speed at the end of this period (dt) from speed sd that still brakes to rest at a within
+// to_end: after the period's trapezoidal travel (sd + sd1)·dt/2 the rest must stop in whole
+// periods of a·dt (sd1²/2a, exact for such steps), so the last period leaves rest from at most
+// a·dt. (√(2·a·to_end), taken before the period's travel, overshot and left up to 3·a·dt for
+// the last step: an optimovel at full fractions stepped wrist 2 from 0.51 rad/s to rest.)
+double rest_limit(double a, double dt, double sd, double to_end) noexcept {
+  if (!(to_end < HUGE_VAL)) {
+    return HUGE_VAL;
+  }
+  const double adt = a * dt;
+  return 0.5 * (-adt + std::sqrt(std::fmax(0.0, adt * adt + 8.0 * a * to_end - 4.0 * adt * sd)));
 }
 
 // past the end of the head piece (not a blend, whose s is a time): on into the next, as far as
@@ -191,16 +205,7 @@ uint32_t tick(const MotionEnv& e) {
     // Braking to rest at the end is not held back by that floor: an optimovel's a follows the
     // pose, and where it shrinks on the way in, the floor at the last tick's a let the path
     // reach its end at speed and step to rest (wrist 2: 0.41 rad/s to 0 in one period)
-    // The end's limit is this period's own: after it (trapezoidal travel (sd + sd1)·dt/2) the
-    // rest must still stop at a in whole periods (sd1²/2a: exact for steps of a·dt), so that the
-    // last period leaves rest from at most a·dt. √(2·a·to_end) taken before the period's
-    // travel overshot it and left up to 3·a·dt for the last step (an optimovel at full
-    // fractions: wrist 2 from 0.51 rad/s to rest in one period)
-    const double adt = a * dt;
-    const double lim_end =
-        to_end < HUGE_VAL
-            ? 0.5 * (-adt + std::sqrt(std::fmax(0.0, adt * adt + 8.0 * a * to_end - 4.0 * adt * st.sd)))
-            : HUGE_VAL;
+    const double lim_end = rest_limit(a, dt, st.sd, to_end);
     const double sd1 = std::fmax(
         0.0, std::fmin(std::fmax(std::fmin(st.sd + a * dt, lim), st.sd - a * dt), lim_end));
     const double ds = 0.5 * (st.sd + sd1) * dt;
