@@ -6,11 +6,10 @@ The loop, closed on the stuck reading, carries the arm on until the two encoders
 paused as for any stop met while running, and the controller log naming the joint. The 30003
 actual_q stays the stuck reading throughout: the joint encoder is what it reports."""
 
-import time
 
 import yaml
 
-from urtwin_proc import Dashboard, Emulator, PrimaryReader, RtReader
+from urtwin_proc import Dashboard, Emulator, PrimaryReader, rt_now
 
 TURN = """def turn():
   q = get_actual_joint_positions()
@@ -20,10 +19,6 @@ TURN = """def turn():
 end
 """
 
-
-def rt_now(host):
-    with RtReader(host) as rt:
-        return rt.read_decoded()
 
 
 def test_a_stuck_joint_encoder_stops_the_moving_arm_with_urs_messages(tmp_path):
@@ -36,11 +31,7 @@ def test_a_stuck_joint_encoder_stops_the_moving_arm_with_urs_messages(tmp_path):
         with PrimaryReader(emu.host, 30001) as pr:
             pr.read()
             emu.send_script(TURN, port=30001)
-            msgs = []
-            t_end = time.monotonic() + 3.0
-            while time.monotonic() < t_end and not any(m["type"] == 5 for m in msgs):
-                msgs += pr.robot_messages(0.2)
-            msgs += pr.robot_messages(0.3)
+            msgs = pr.messages_until(5, 3.0, then=0.3)
         after = rt_now(emu.host)
         d = Dashboard(emu.host)
         state = d.ask("programState")

@@ -11,7 +11,7 @@ import time
 
 import yaml
 
-from urtwin_proc import Dashboard, Emulator, PrimaryReader, RtReader
+from urtwin_proc import Dashboard, Emulator, PrimaryReader, rt_now
 
 TURN = """def turn():
   q = get_actual_joint_positions()
@@ -23,10 +23,6 @@ end
 
 FAULT = 9  # safety mode FAULT
 
-
-def rt_now(host):
-    with RtReader(host) as rt:
-        return rt.read_decoded()
 
 
 def wait_for(pred, timeout=3.0):
@@ -48,11 +44,7 @@ def test_a_dragging_brake_faults_the_joint_and_restart_safety_recovers(tmp_path)
         with PrimaryReader(emu.host, 30001) as pr:
             pr.read()
             emu.send_script(TURN, port=30001)
-            msgs = []
-            t_end = time.monotonic() + 3.0
-            while time.monotonic() < t_end and not any(m["type"] == 6 for m in msgs):
-                msgs += pr.robot_messages(0.2)
-            msgs += pr.robot_messages(0.5)
+            msgs = pr.messages_until(6, 3.0, then=0.5)
         after = rt_now(emu.host)
         d = Dashboard(emu.host)
         try:

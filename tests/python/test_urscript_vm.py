@@ -8,7 +8,7 @@ import re
 import socket
 import time
 
-from urtwin_proc import Dashboard, Emulator, PrimaryReader, RtReader
+from urtwin_proc import Dashboard, Emulator, PrimaryReader, RtReader, rt_now
 
 RUNAWAY = """def runaway():
   thread spin():
@@ -147,11 +147,6 @@ WALK = f"""def walk():
 end
 """
 
-
-def rt_now(host):
-    """the newest 30003 packet: a fresh connection, so nothing stale is buffered"""
-    with RtReader(host) as rt:
-        return rt.read_decoded()
 
 
 def test_a_protective_stop_pauses_the_program_and_play_runs_the_move_again():

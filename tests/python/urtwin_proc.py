@@ -187,6 +187,12 @@ class RtReader:
         self.close()
 
 
+def rt_now(host):
+    """the newest 30003 packet: a fresh connection, so nothing stale is buffered"""
+    with RtReader(host) as rt:
+        return rt.read_decoded()
+
+
 # ---- ports 30001/30002 (protocols.md §4) ----
 
 class PrimaryReader:
@@ -208,6 +214,15 @@ class PrimaryReader:
             if kind == 20:
                 out.append(decode_robot_message(body))
         return out
+
+    def messages_until(self, mtype, timeout, then):
+        """Robot messages until one of type mtype has come (or timeout [s] has passed), and
+        those of `then` seconds more."""
+        msgs = []
+        t_end = time.monotonic() + timeout
+        while time.monotonic() < t_end and not any(m["type"] == mtype for m in msgs):
+            msgs += self.robot_messages(0.2)
+        return msgs + self.robot_messages(then)
 
     def close(self):
         self.sock.close()
