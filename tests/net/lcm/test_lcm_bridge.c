@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "test_support.h"
+#include "udp_drops.h"
 #include "urt/errors.h"
 #include "urt/net/lcm_bridge.h"
 #include "urt/net/lcm_sender.h"
@@ -145,7 +146,8 @@ typedef struct names {
 static names_t unique_names(int k) {
   names_t n;
   int pid = (int)getpid();
-  snprintf(n.url, sizeof n.url, "udpm://239.255.76.67:%d?ttl=0", 10000 + (pid * 7 + k) % 20000);
+  snprintf(n.url, sizeof n.url, "udpm://239.255.76.67:%d?" UDP_DROPS_URL_OPTIONS,
+           10000 + (pid * 7 + k) % 20000);
   snprintf(n.status, sizeof n.status, "URTWIN_STATUS_T%d_%d", pid, k);
   snprintf(n.drive, sizeof n.drive, "URTWIN_DRIVE_T%d_%d", pid, k);
   snprintf(n.command, sizeof n.command, "URTWIN_COMMAND_T%d_%d", pid, k);
@@ -204,7 +206,7 @@ typedef struct listener {
   urtwin_lcmt_urtwin_status_subscription_t *sub;
   pthread_t thread;
   atomic_int stop;
-  long count, gaps;
+  long count, gaps, disorder;  // disorder: a tick not after the one before (repeated, reordered)
   int64_t first_tick, last_tick;
   double last_q0;
 } listener_t;
@@ -214,6 +216,8 @@ static void on_status(const lcm_recv_buf_t *rbuf, const char *ch,
   listener_t *l = user;
   if (l->count == 0) {
     l->first_tick = m->tick;
+  } else if (m->tick <= l->last_tick) {
+    l->disorder++;
   } else if (m->tick != l->last_tick + 1) {
     l->gaps++;
   }
@@ -287,6 +291,7 @@ static void test_lcm_bridge__publishes_every_tick_at_the_controller_rate(void **
   sleep_s(0.05);
   assert_int_equal(urt_lcm_bridge_start(b), 0);
   sleep_s(0.05);  // the publisher starts at the newest tick: let it start before tick 1
+  long drops0 = udp_drops_now();
 
   // 1 s at 500 Hz
   ticker_t t = {&f, 0.002, 500};
@@ -298,20 +303,27 @@ static void test_lcm_bridge__publishes_every_tick_at_the_controller_rate(void **
   WAIT_FOR(b, last_tick, 500, 1.0);
   sleep_s(0.05);
   listener_stop(&l);
+  long dropped = udp_drops_now() - drops0;
 
   urt_lcm_stats_t st;
   urt_lcm_bridge_get_stats(b, &st);
   urt_lcm_bridge_destroy(b);
   printf("# 500 ticks in %.3f s: sent %lu, received %ld (ticks %ld..%ld), gaps %ld, "
-         "drive sent %lu\n", elapsed, (unsigned long)st.status_sent, l.count,
-         (long)l.first_tick, (long)l.last_tick, l.gaps, (unsigned long)st.drive_sent);
+         "drive sent %lu; the kernel dropped %ld datagrams meanwhile\n", elapsed,
+         (unsigned long)st.status_sent, l.count, (long)l.first_tick, (long)l.last_tick, l.gaps,
+         (unsigned long)st.drive_sent, dropped);
   assert_int_equal(st.status_sent, 500);
   assert_int_equal(st.ticks_lost, 0);
   assert_int_equal(st.publish_errors, 0);
-  assert_int_equal(l.count, 500);
-  assert_int_equal(l.gaps, 0);
-  assert_int_equal(l.last_tick, 500);
-  assert_true(fabs(l.last_q0 - 0.5) < 1e-12);
+  // every status received once and in order, but for what loopback UDP dropped (udp_drops.h)
+  assert_int_equal(l.disorder, 0);
+  assert_true(l.count <= 500);
+  assert_true(500 - l.count <= dropped);
+  if (l.count == 500) {
+    assert_int_equal(l.gaps, 0);
+    assert_int_equal(l.last_tick, 500);
+    assert_true(fabs(l.last_q0 - 0.5) < 1e-12);
+  }
   assert_int_equal(st.drive_sent, 2000);  // 4 drive samples a tick, drive_rate 0: all
 }
 

@@ -14,6 +14,7 @@
 
 #include "test_model.h"
 #include "test_support.h"
+#include "udp_drops.h"
 #include "urt/core.h"
 #include "urt/errors.h"
 #include "urt/loop.h"
@@ -43,7 +44,7 @@ typedef struct names {
 static names_t unique_names(int k) {
   names_t n;
   int pid = (int)getpid();
-  snprintf(n.url, sizeof n.url, "udpm://239.255.76.67:%d?ttl=0",
+  snprintf(n.url, sizeof n.url, "udpm://239.255.76.67:%d?" UDP_DROPS_URL_OPTIONS,
            10000 + (pid * 7 + 100 + k) % 20000);
   snprintf(n.status, sizeof n.status, "URTWIN_STATUS_L%d_%d", pid, k);
   snprintf(n.drive, sizeof n.drive, "URTWIN_DRIVE_L%d_%d", pid, k);
@@ -104,7 +105,7 @@ typedef struct listener {
   atomic_int stop;
   pthread_mutex_t mu;
   // status: how often each tick arrived (ticks beyond MAX_TICKS are not recorded)
-  long count, gaps, repeats;
+  long count, gaps, repeats, disorder;  // disorder: a tick before the one before (reordered)
   int64_t last_tick;
   urtwin_lcmt_urtwin_status last;
   uint8_t tick_seen[MAX_TICKS];
@@ -140,7 +141,9 @@ static void on_status(const lcm_recv_buf_t *rbuf, const char *ch,
     pthread_mutex_unlock(&l->mu);
     return;
   }
-  if (l->count > 0 && m->tick != l->last_tick + 1) {
+  if (l->count > 0 && m->tick < l->last_tick) {
+    l->disorder++;
+  } else if (l->count > 0 && m->tick != l->last_tick + 1) {
     l->gaps++;
   }
   if (m->tick >= 0 && m->tick < MAX_TICKS) {
@@ -220,6 +223,7 @@ static void test_lcm_loop__status_every_tick_at_the_controller_rate(void **state
   assert_int_equal(urt_loop_start(r.loop), 0);
   assert_int_equal(urt_lcm_bridge_start(r.bridge), 0);
   sleep_s(0.2);
+  long drops0 = udp_drops_now();
 
   // the window: ticks made during 2 s of wall time
   double t0 = now_s();
@@ -235,6 +239,7 @@ static void test_lcm_loop__status_every_tick_at_the_controller_rate(void **state
   urt_loop_get_stats(r.loop, &ls);
   rig_stop(&r);
   listener_stop(&l);
+  long dropped = udp_drops_now() - drops0;
   long in_window = ticks_seen(&l, k0, k1);
   long drive_in_window = drive_seen(&l, 2 * k0, 2 * k1);
 
@@ -242,19 +247,29 @@ static void test_lcm_loop__status_every_tick_at_the_controller_rate(void **state
   double rate = ticks / wall;
   print_message("ticks %.0f in %.3f s (%.1f Hz); status in window %ld, total %ld, gaps %ld; "
                 "drive in window %ld (%.1f Hz of physics time); lost %lu/%lu; loop overruns "
-                "%lu, missed periods %lu, exec max %.0f us\n",
+                "%lu, missed periods %lu, exec max %.0f us; the kernel dropped %ld datagrams\n",
                 ticks, wall, rate, in_window, l.count, l.gaps, drive_in_window,
                 drive_in_window / (ticks * 0.002), (unsigned long)st.ticks_lost,
                 (unsigned long)st.drive_lost, (unsigned long)ls.overruns,
-                (unsigned long)ls.missed_periods, ls.exec_max * 1e6);
+                (unsigned long)ls.missed_periods, ls.exec_max * 1e6, dropped);
 
-  // every tick published and received once, in order
+  // every tick published and received once, in order, but for what loopback UDP dropped
+  // (udp_drops.h: each missing status and drive message among the kernel's drops)
   assert_int_equal(st.ticks_lost, 0);
   assert_int_equal(st.publish_errors, 0);
-  assert_int_equal(l.gaps, 0);
-  assert_int_equal(in_window, (long)(k1 - k0));
-  // drive: one message per millisecond of physics time
-  assert_true(fabs(drive_in_window - 2.0 * ticks) <= 0.01 * 2.0 * ticks + 1);
+  assert_int_equal(l.disorder, 0);
+  for (uint64_t k = k0 + 1; k <= k1 && k < MAX_TICKS; ++k) {
+    assert_true(l.tick_seen[k] <= 1);
+  }
+  long missing = (long)(k1 - k0) - in_window;
+  assert_true(missing >= 0 && missing <= dropped);
+  if (dropped == 0) {
+    assert_int_equal(l.gaps, 0);
+  }
+  // drive: one message per millisecond of physics time (±1 %), short by at most the drops left
+  double drive_tol = 0.01 * 2.0 * ticks + 1;
+  assert_true(drive_in_window <= 2.0 * ticks + drive_tol);
+  assert_true(2.0 * ticks - drive_in_window <= drive_tol + (double)(dropped - missing));
   // the controller rate, when this machine let the loop keep wall time
   if (ls.missed_periods == 0) {
     assert_true(fabs(rate - 500.0) <= 5.0);
@@ -280,6 +295,7 @@ static void test_lcm_loop__command_stream_moves_the_arm(void **state) {
   // 0.5 s smooth ramp (5th-order, zero speed at both ends), then 0.5 s hold
   lcm_t *lcm = lcm_create(r.n.url);
   assert_non_null(lcm);
+  long drops0 = udp_drops_now();
   const double T = 0.5, dq = 0.05;
   double q[6], qd[6];
   for (int k = 1; k <= 500; ++k) {
@@ -300,14 +316,18 @@ static void test_lcm_loop__command_stream_moves_the_arm(void **state) {
   urt_lcm_bridge_get_stats(r.bridge, &st);
   rig_stop(&r);
   listener_stop(&l);
+  long dropped = udp_drops_now() - drops0;
 
   print_message("joint 0: %.5f -> %.5f rad (target %.5f); commands received %lu accepted %lu "
-                "rejected %lu dropped %lu; motion %d, safety %d, fault 0x%x\n",
+                "rejected %lu dropped %lu; motion %d, safety %d, fault 0x%x; the kernel dropped "
+                "%ld datagrams\n",
                 s0.q_actual[0], s1.q_actual[0], s1.q_target[0], (unsigned long)st.cmd_received,
                 (unsigned long)st.cmd_accepted, (unsigned long)st.cmd_rejected,
-                (unsigned long)st.cmd_dropped, s1.motion, s1.safety_mode, s1.ctrl_fault);
-  assert_int_equal(st.cmd_received, 500);
-  assert_int_equal(st.cmd_accepted, 500);
+                (unsigned long)st.cmd_dropped, s1.motion, s1.safety_mode, s1.ctrl_fault, dropped);
+  // every command received and accepted, but for what loopback UDP dropped (udp_drops.h); the
+  // hold's commands repeat the end, so a dropped one changes nothing below
+  assert_true(st.cmd_received <= 500 && 500 - (long)st.cmd_received <= dropped);
+  assert_int_equal(st.cmd_accepted, st.cmd_received);
   assert_int_equal(s1.safety_mode, URT_SAFETY_MODE_NORMAL);
   assert_int_equal(s1.motion, URT_MOTION_DIRECT);
   assert_true(fabs(s1.q_target[0] - (s0.q_target[0] + dq)) < 1e-9);
@@ -377,6 +397,7 @@ static void test_lcm_loop__free_pacing_sends_or_counts_every_tick(void **state) 
   listener_start(&l, &r.n);
   assert_int_equal(urt_lcm_bridge_start(r.bridge), 0);  // before the loop: from tick 1 on
   sleep_s(0.05);
+  long drops0 = udp_drops_now();
   assert_int_equal(urt_loop_start(r.loop), 0);
   sleep_s(1.0);
   urt_loop_stop(r.loop);
@@ -390,14 +411,17 @@ static void test_lcm_loop__free_pacing_sends_or_counts_every_tick(void **state) 
   sleep_s(0.1);
   rig_stop(&r);
   listener_stop(&l);
-  print_message("free pacing: %lu ticks in 1 s, sent %lu, lost %lu, received %ld\n",
-                (unsigned long)ticks, (unsigned long)st.status_sent,
-                (unsigned long)st.ticks_lost, l.count);
+  long dropped = udp_drops_now() - drops0;
+  print_message("free pacing: %lu ticks in 1 s, sent %lu, lost %lu, received %ld; the kernel "
+                "dropped %ld datagrams\n", (unsigned long)ticks, (unsigned long)st.status_sent,
+                (unsigned long)st.ticks_lost, l.count, dropped);
   assert_true(ticks > 10);  // free pacing runs as fast as it can: under sanitizers that is
                             // below real time; what matters is that every tick is sent or counted
   assert_int_equal(st.status_sent + st.ticks_lost, ticks);
   assert_int_equal(st.last_tick, ticks);
-  assert_int_equal(l.count, (long)st.status_sent);
+  // every status sent arrives once, in order, but for what loopback UDP dropped (udp_drops.h)
+  assert_int_equal(l.disorder, 0);
+  assert_true(l.count <= (long)st.status_sent && (long)st.status_sent - l.count <= dropped);
 }
 
 int main(void) {
