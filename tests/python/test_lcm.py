@@ -16,6 +16,7 @@ import time
 import pytest
 
 from rtde_client import RtdeClient
+from udp_drops import URL_OPTIONS, udp_drops_now
 from urtwin_proc import BUILD, Emulator, PrimaryReader, RtReader, URTWIN
 
 import lcm  # pinned in tools/requirements.txt
@@ -41,7 +42,7 @@ def lcm_endpoint():
     """A udpm URL and channel prefix of this process and call."""
     k = next(_runs)
     port = 10000 + (os.getpid() * 13 + 500 + k) % 20000  # below the ephemeral range
-    return f"udpm://239.255.76.67:{port}?ttl=0", f"URTWIN_PY{os.getpid()}_{k}"
+    return f"udpm://239.255.76.67:{port}?{URL_OPTIONS}", f"URTWIN_PY{os.getpid()}_{k}"
 
 
 class Listener:
@@ -109,6 +110,7 @@ def test_lcm_status_every_tick_equals_30003_and_drive_at_its_rate():
     rt_packets = {}
     with Emulator("--lcm", "--lcm-url", url, "--lcm-prefix", prefix, "--drive-rate", "1000") as emu:
         ls = Listener(url, prefix)
+        drops0 = udp_drops_now()
         stop = threading.Event()
 
         def read_rt():
@@ -123,6 +125,7 @@ def test_lcm_status_every_tick_equals_30003_and_drive_at_its_rate():
         stop.set()
         reader.join(timeout=2)
         ls.close()
+    dropped = udp_drops_now() - drops0
     with ls.lock:
         msgs = [m for t, m in ls.status]
         drive = list(ls.drive)
@@ -130,6 +133,7 @@ def test_lcm_status_every_tick_equals_30003_and_drive_at_its_rate():
     window = [m for t, m in ls.status if t0 + 0.3 <= t < t0 + 10.3]
     ticks = [m.tick for m in msgs]
     gaps = sum(1 for a, b in zip(ticks, ticks[1:]) if b != a + 1)
+    missing = sum(b - a - 1 for a, b in zip(ticks, ticks[1:]) if b > a + 1)
     span = window[-1].time - window[0].time
     # the same tick on both interfaces carries the same numbers, bit for bit
     both = [m for m in msgs if m.tick in rt_packets]
@@ -142,16 +146,20 @@ def test_lcm_status_every_tick_equals_30003_and_drive_at_its_rate():
     print(f"\nLCM status: {len(window)} messages in 10 s of wall time (controller time "
           f"{span:.3f} s), {gaps} gaps, {msgs[-1].ticks_lost} ticks lost; {len(both)} ticks also "
           f"read on 30003, {differ} field differences; drive: {len(drive)} messages over "
-          f"{drive[-1].time - drive[0].time:.3f} s of physics time")
-    assert gaps == 0
+          f"{drive[-1].time - drive[0].time:.3f} s of physics time; the kernel dropped "
+          f"{dropped} datagrams")
+    # every tick once and in order, but for what loopback UDP dropped (udp_drops.py)
+    assert all(b > a for a, b in zip(ticks, ticks[1:]))
+    assert missing <= dropped and (gaps == 0 or dropped > 0)
     assert msgs[-1].ticks_lost == 0
     assert all(m.utime == round(m.tick * 2000) and m.period == 0.002 for m in msgs)
-    assert abs(len(window) - 5000) <= 50  # ± 1 %
+    assert -50 - dropped <= len(window) - 5000 <= 50  # ± 1 %
     assert len(both) > 4500 and differ == 0
     seqs = [d.seq for d in drive]
     assert all(b > a for a, b in zip(seqs, seqs[1:]))
-    rate = (len(drive) - 1) / (drive[-1].time - drive[0].time)
-    assert abs(rate - 1000) <= 10
+    span_d = drive[-1].time - drive[0].time
+    rate = (len(drive) - 1) / span_d
+    assert abs(rate - 1000) <= 10 or (rate < 1000 and 1000 * span_d - len(drive) <= dropped + 10)
 
 
 def test_lcm_command_stream_moves_the_arm():
