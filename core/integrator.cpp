@@ -407,7 +407,7 @@ void integrator_step(const urt_model_t* m, urt_data_t* d, int kind, double s0) n
   const double h = tab->h[kind];
   double (*x)[URT_NXJ] = d->x;
 
-  // a fine step (kind kSub) takes every joint at the sub-step size, with no splitting. A
+  // a fine step (kind kSub or kFine) takes every joint at its size, with no splitting. A
   // stiff-friction joint is split off only while it is in or near its Stribeck dip (|q̇| below
   // v_sub, twice the dip's end): the negative slope the sub-steps exist for lies there, and so
   // do the stick-to-slip reversals. Faster, its slope is a positive damping that the macro

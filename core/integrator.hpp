@@ -40,13 +40,16 @@ struct DriveTables {
   int filter_rows_apart;
 };
 
-enum StepKind { kMacro = 0, kSub = 1, kNumStepKinds = 2 };
+// kFine: a step that stays implausible as sub-steps is redone once more, each sub-step as
+// kFinePerSub steps of this size (urt_step)
+enum StepKind { kMacro = 0, kSub = 1, kFine = 2, kNumStepKinds = 3 };
+constexpr int kFinePerSub = 4;
 
 }  // namespace urt::core
 
 // The integrator's precomputed tables, owned by the model.
 struct urt_integrator_tables {
-  double h[urt::core::kNumStepKinds];   // macro step and sub-step [s]
+  double h[urt::core::kNumStepKinds];   // macro step, sub-step and fine step [s]
   int n_sub;                            // sub-steps per macro step
   int substepped[URT_NJ];               // 1: joint j is sub-stepped (while |q̇| < v_sub)
   double v_sub[URT_NJ];                 // a sub-stepped joint's macro step splits it off only

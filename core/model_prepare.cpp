@@ -111,6 +111,7 @@ int integrator_prepare(const urt_model_t* m, urt_integrator_tables* tab) noexcep
     tab->n_sub = 1;
   }
   tab->h[kSub] = m->dt / tab->n_sub;
+  tab->h[kFine] = tab->h[kSub] / kFinePerSub;
   for (int j = 0; j < URT_NJ; j++) {
     tab->g_slope_min[j] = friction_slope_min(&m->friction[j]);
     tab->j_out[j] = output_inertia_min(m, j);
@@ -167,7 +168,8 @@ extern "C" int urt_model_prepare(urt_model_t* m) {
   }
   urt_arm_prepare(&m->arm);
 
-  // integrator tables (about 340 kB: four saturation sets, each with and without a backlash gap): allocated here, never in the step
+  // integrator tables (about 460 kB: three step sizes, four saturation sets, each with and
+  // without a backlash gap): allocated here, never in the step
   if (!m->tables) {
     m->tables = static_cast<urt_integrator_tables*>(std::calloc(1, sizeof(urt_integrator_tables)));
     if (!m->tables) {

@@ -311,6 +311,7 @@ void print_integrator(Emitter &e, const urt_model_t *m) {
   e.begin_map("integrator");
   e.num("n_sub", t->n_sub, "-", true);
   e.num("h_sub", t->h[kSub], "s", true);
+  e.num("h_fine", t->h[kFine], "s", true);
   e.nums("substepped", sub, URT_NJ, "1 = sub-stepped joint", true);
   e.nums("substep_below", t->v_sub, URT_NJ, "rad/s: only while |qd| is below", true);
   e.nums("friction_slope_min", t->g_slope_min, URT_NJ, "N m s/rad", true);

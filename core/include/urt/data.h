@@ -114,7 +114,8 @@ typedef struct urt_data {
   uint32_t pstop;                    /* URT_PSTOP_* bits; 0 when running        */
   uint32_t isat_count, vsat_count;   /* steps that began with a saturated loop (a torque-mode
                                       * joint counts in isat_count: i_ref is held)  */
-  uint32_t refined_count;            /* steps redone as sub-steps (urt_step)    */
+  uint32_t refined_count;            /* steps redone as sub-steps (urt_step); one
+                                      * redone again as fine steps counts twice */
 
   /* parameters — the model's values that a run may change (last: the layout before them is
    * the one the recorded controller hashes fold) */
