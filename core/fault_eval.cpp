@@ -151,6 +151,28 @@ void joint_reset(const urt_model_t* m, int j, urt_fault_joint_t* e) {
   e->z_max = m->tables ? m->tables->z_max[j] : 0.0;
 }
 
+// The friction parameters joint j runs on now: its fault's, or the model's.
+const urt_friction_params_t& friction_now(const urt_model_t* m, const urt_data_t* d, int j) {
+  return ((d->faults.joint_mask >> j) & 1u) ? d->faults.joint[j].friction : m->friction[j];
+}
+
+// LuGre's bristles carry at most g(q̇)/σ0: its own solutions keep |z| within that. When a fault
+// lowers a joint's Coulomb level (a brake drag released, an intermittent window closing, a
+// lubricant fault cleared), bristles loaded beyond the new level slip to it at once instead of
+// being carried over: left beyond it, a stuck joint's z stays there (ż = q̇ − σ0|q̇|z/g is 0 at
+// rest), every step is implausible and the arm stops. Called only where the level fell; below
+// f_c (1 − |asym|), which g never goes under, nothing is evaluated.
+void bristles_to_level(const urt_friction_params_t& fp, double* x) {
+  double& z = x[URT_X_Z];
+  if (!fp.enabled || fp.sigma0 * std::fabs(z) <= fp.f_c * (1.0 - std::fabs(fp.asym))) {
+    return;
+  }
+  const double z_lim = urt_friction_g(&fp, x[URT_X_QD]) / fp.sigma0;
+  if (std::fabs(z) > z_lim) {
+    z = std::copysign(z_lim, z);
+  }
+}
+
 }  // namespace
 
 extern "C" const char* urt_fault_class_name(int c) {
@@ -317,7 +339,6 @@ extern "C" int urt_data_add_fault(const urt_model_t* m, urt_data_t* d, const urt
 
 extern "C" int urt_data_clear_faults(const urt_model_t* m, urt_data_t* d, int cls, int joint,
                                      int component) {
-  (void)m;
   urt_fault_state_t& fs = d->faults;
   int kept = 0;
   for (int k = 0; k < fs.s.n; k++) {
@@ -334,8 +355,18 @@ extern "C" int urt_data_clear_faults(const urt_model_t* m, urt_data_t* d, int cl
   const int removed = fs.s.n - kept;
   fs.s.n = kept;
   if (kept == 0 && removed > 0) {
-    // nothing left: no joint reads fault parameters any more (urt_step stops advancing them)
+    // nothing left: no joint reads fault parameters any more (urt_step stops advancing them);
+    // where that lowers a joint's friction level its bristles slip to the model's
+    double fc_before[URT_NJ];
+    for (int j = 0; j < URT_NJ; j++) {
+      fc_before[j] = friction_now(m, d, j).f_c;
+    }
     std::memset(&fs, 0, sizeof fs);
+    for (int j = 0; j < URT_NJ; j++) {
+      if (m->friction[j].f_c < fc_before[j]) {
+        bristles_to_level(m->friction[j], d->x[j]);
+      }
+    }
   }
   return removed;
 }
@@ -409,6 +440,12 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
   urt_fault_state_t& fs = d->faults;
   const int n = fs.s.n;
   const double t = d->t, h = m->dt;
+
+  // each joint's Coulomb level before this update: where it falls, the bristles follow (below)
+  double fc_before[URT_NJ];
+  for (int j = 0; j < URT_NJ; j++) {
+    fc_before[j] = friction_now(m, d, j).f_c;
+  }
 
   // the joints any fault targets get the model's parameters back, then every fault's effect
   uint32_t mask = 0;
@@ -614,6 +651,12 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
     }
   }
   fs.joint_mask = mask;
+  for (int j = 0; j < URT_NJ; j++) {
+    const urt_friction_params_t& fp = friction_now(m, d, j);
+    if (fp.f_c < fc_before[j]) {
+      bristles_to_level(fp, d->x[j]);
+    }
+  }
 }
 
 extern "C" void urt_faults_truth(const urt_model_t* m, const urt_data_t* d,

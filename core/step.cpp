@@ -32,6 +32,16 @@ bool states_finite(const double (*x)[URT_NXJ]) noexcept {
   return bad == 0;
 }
 
+// z_max is LuGre's bound at the joint's speed limit; a joint can run past that limit (a drive
+// wound up against a brake drag that is released), where g(q̇) and so the bound are higher:
+// within 1.5 g(q̇)/σ0 at the speed it has reached, the bristles are still plausible. Evaluated
+// only when z is beyond 1.5 z_max.
+bool bristles_within_speed_level(const urt_model_t* m, const urt_data_t* d, int j) {
+  const urt_friction_params_t& fp =
+      ((d->faults.joint_mask >> j) & 1u) ? d->faults.joint[j].friction : m->friction[j];
+  return std::fabs(d->x[j][URT_X_Z]) <= 1.5 * urt_friction_g(&fp, d->x[j][URT_X_QD]) / fp.sigma0;
+}
+
 // A step is implausible when it produced what no motion of the arm can: a non-finite value,
 // a bristle deflection far beyond g(q̇_max)/σ0 (LuGre keeps |z| below it), or, with the drives
 // engaged, a joint ten times faster than its limit. That is how the W-method fails at a
@@ -45,7 +55,8 @@ bool step_plausible(const urt_model_t* m, const urt_data_t* d) {
     // a faulted joint's friction levels bound z by their own g (urt_fault_joint_t.z_max)
     const double z_max = ((d->faults.joint_mask >> j) & 1u) ? d->faults.joint[j].z_max
                                                              : m->tables->z_max[j];
-    if (m->friction[j].enabled && std::fabs(d->x[j][URT_X_Z]) > 1.5 * z_max) {
+    if (m->friction[j].enabled && std::fabs(d->x[j][URT_X_Z]) > 1.5 * z_max &&
+        !bristles_within_speed_level(m, d, j)) {
       return false;
     }
     if (m->drives_engaged && std::fabs(d->x[j][URT_X_QD]) > 10.0 * m->joint[j].qd_max) {

@@ -274,6 +274,56 @@ static void test_faults__crack_puts_a_current_line_at_twice_the_wave_generator_f
   urt_model_free(m);
 }
 
+/* a brake dragging wrist 3 while its drive pushes it at 0.2 rad/s: the bristles carry up to
+ * the dragged level (f_c + T_b)/σ0. When the drag goes (cleared, or an intermittent fault's off
+ * window) the level falls back below what they carry; they slip to the new level, as LuGre's
+ * own bound says, and the arm goes on. Before, the bristles stayed beyond 1.5 g/σ0, every step
+ * was implausible and the arm stopped. */
+static void drag_then_release(int intermittent, long *stopped_at, double *z_ratio,
+                              double *lag_end) {
+  const int j = 5;
+  urt_model_t *m = urt_test_model(urt_test_quiet);
+  urt_data_t *d = new_data(m);
+  urt_fault_spec_t f = spec(URT_FAULT_BRAKE_DRAG, j, 28.0);
+  if (intermittent) {
+    f.profile = URT_FAULT_INTERMITTENT;
+    f.on = 0.2;
+    f.off = 0.1;
+  }
+  install(m, d, &f, 1);
+  d->cmd.qd[j] = 0.2;
+  *stopped_at = -1;
+  *z_ratio = 0.0;
+  const long n = lround(0.6 / m->dt), clear_at = lround(0.25 / m->dt);
+  for (long k = 0; k < n && *stopped_at < 0; k++) {
+    if (!intermittent && k == clear_at) {
+      *z_ratio = fabs(d->x[j][URT_X_Z]) * m->friction[j].sigma0 / m->friction[j].f_c;
+      assert_int_equal(urt_data_clear_faults(m, d, -1, -1, -1), 1);
+    }
+    if (urt_step(m, d) != URT_OK) {
+      *stopped_at = k;
+    }
+  }
+  *lag_end = d->cmd.q[j] - d->x[j][URT_X_Q];
+  free(d);
+  urt_model_free(m);
+}
+
+static void test_faults__bristles_slip_when_a_brake_drag_goes_and_the_arm_goes_on(void **state) {
+  (void)state;
+  long stopped;
+  double ratio, lag;
+  drag_then_release(0, &stopped, &ratio, &lag);
+  print_message("cleared: bristle torque %.2f f_c at the clear; stopped at step %ld (-1: never); "
+                "0.35 s later the joint %.2e rad behind its set-point\n", ratio, stopped, lag);
+  assert_true(ratio > 1.5);  // the bristles did carry more than the healthy level
+  assert_int_equal(stopped, -1);
+  assert_true(fabs(lag) < 1e-3);  // free again, it follows
+  drag_then_release(1, &stopped, &ratio, &lag);
+  print_message("intermittent 0.2 s on, 0.1 s off: stopped at step %ld (-1: never)\n", stopped);
+  assert_int_equal(stopped, -1);
+}
+
 /* a healthy and a faulted run of joint j from the same start (the model with overrides ov), the
  * set-point moving at v for `t1` seconds and then at −v for `t2` (t2 = 0: no reversal); each
  * run's motor angle and joint angle at the end of each leg go to qm[run][leg], q[run][leg] */
@@ -916,6 +966,7 @@ int main(void) {
       cmocka_unit_test(test_faults__supply_sag_saturates_the_voltage_where_back_emf_plus_ri_reach_it),
       cmocka_unit_test(test_faults__lubricant_scales_the_sliding_friction),
       cmocka_unit_test(test_faults__brake_drag_adds_its_coulomb_torque),
+      cmocka_unit_test(test_faults__bristles_slip_when_a_brake_drag_goes_and_the_arm_goes_on),
       cmocka_unit_test(test_faults__gear_stiffness_loss_is_the_model_with_k_m_edited),
       cmocka_unit_test(test_faults__crack_puts_a_current_line_at_twice_the_wave_generator_frequency),
       cmocka_unit_test(test_faults__backlash_is_lost_motion_of_its_width_at_a_reversal),
