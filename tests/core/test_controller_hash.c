@@ -116,7 +116,7 @@ static const recorded_t kRecorded[] = {
     {"gcc-O+fma",
      {0xb4ab92369250a360ull, 0x664f9fea2e8115c1ull, 0xb00a57f6655ccc3bull,
       0xcfdda02b9fe32fcdull, 0x323f3babfc76bb4dull, 0x0b06ff57800c551dull,
-      0xf12d8777641aaeb2ull, 0x7001fa98b2e8d1a5ull, 0x9207c3add24fbdb6ull,
+      0xf12d8777641aaeb2ull, 0x7001fa98b2e8d1a5ull, 0x37b075bb16908a4bull,
       0xd21ce64f0de072aeull, 0xc5dc97668d1219e2ull, 0x1b683c9b9087c81full,
       0x506391925eb1c406ull}},
 };

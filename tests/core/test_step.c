@@ -261,6 +261,42 @@ static void run_excitation(const char *rate, uint64_t seed) {
   urt_model_free(m);
 }
 
+// The pick-and-place's wrist 2 over its first 9.0 s, which hold its fast stop and, at 8.91 s,
+// a stick-to-slip reversal: the largest friction torque on it.
+static double pickplace_wrist2_friction_max(const char *rate) {
+  const char *const ov[] = {rate, NULL};
+  urt_model_t *m = urt_test_model(ov);
+  urt_data_t *d = new_data(m);
+  urt_traj_t tr;
+  assert_int_equal(urt_traj_make_pickplace(&tr, m->q0), 0);
+  double worst = 0.0;
+  const int n = (int)lround(9.0 / m->dt);
+  for (int k = 0; k < n; k++) {
+    urt_command_t c;
+    memset(&c, 0, sizeof c);
+    urt_traj_eval(&tr, d->t, c.q, c.qd, c.qdd);
+    assert_int_equal(urt_command_set(m, d, &c), 0);
+    assert_int_equal(urt_step(m, d), URT_OK);
+    urt_data_update_outputs(m, d);
+    worst = fmax(worst, fabs(d->t_f[4]));
+  }
+  free(d);
+  urt_model_free(m);
+  return worst;
+}
+
+// At 10 kHz the macro step took that reversal on the wrong side of its linearisation: wrist 2
+// went from −0.001 to +0.20 rad/s in one step with 59 N m of friction (f_c 1.7 N m). A step
+// whose acceleration jumps (step_rough) is refined; the friction peak is then the 20 kHz one.
+static void test_step__a_rough_step_is_refined_so_10_khz_has_the_20_khz_friction(void **state) {
+  (void)state;
+  const double f10 = pickplace_wrist2_friction_max("simulation.dt=1e-4");
+  const double f20 = pickplace_wrist2_friction_max("simulation.dt=5e-5");
+  print_message("wrist 2's largest friction torque over 9 s of pick-and-place: %.3f N m at "
+                "10 kHz, %.3f N m at 20 kHz\n", f10, f20);
+  assert_true(fabs(f10 - f20) <= 0.05 * f20);
+}
+
 // The dataset demo's shoulder backlash runs that stopped (payload 0, seed 1, onset 2 s): an
 // impact of the circular spline on the output at 8.77 s (1.45 mrad) and 8.23 s (2.9 mrad)
 // shook the stuck wrist 2 loose within one step, a reversal that the 5 µs sub-steps also
@@ -435,6 +471,7 @@ int main(void) {
       cmocka_unit_test(test_step__released_arm_conserves_energy_for_10_s),
       cmocka_unit_test(test_step__noisy_excitations_at_10_and_20_khz_never_stop),
       cmocka_unit_test(test_step__shoulder_backlash_impacts_never_stop_an_excitation),
+      cmocka_unit_test(test_step__a_rough_step_is_refined_so_10_khz_has_the_20_khz_friction),
       cmocka_unit_test(test_step__refine_every_forces_the_fine_path_on_every_nth_step),
       cmocka_unit_test(test_step__standing_wrist_3_in_the_macro_step_follows_the_fine_path),
       cmocka_unit_test(test_step__unstable_settings_end_in_a_protective_stop_not_in_nan),
