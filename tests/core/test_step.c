@@ -233,6 +233,15 @@ static void test_step__released_arm_conserves_energy_for_10_s(void **state) {
   urt_model_free(m);
 }
 
+// One step on trajectory tr: its set-point at the data's time as the command, then urt_step.
+static int traj_step(const urt_model_t *m, urt_data_t *d, const urt_traj_t *tr) {
+  urt_command_t c;
+  memset(&c, 0, sizeof c);
+  urt_traj_eval(tr, d->t, c.q, c.qd, c.qdd);
+  assert_int_equal(urt_command_set(m, d, &c), 0);
+  return urt_step(m, d);
+}
+
 // Noisy excitation runs in which single W steps at stick-to-slip reversals used to blow up
 // (wrist 2 at 20 kHz, wrist 1 at 10 kHz): urt_step must redo them as sub-steps and never stop.
 static void run_excitation(const char *rate, uint64_t seed) {
@@ -244,11 +253,7 @@ static void run_excitation(const char *rate, uint64_t seed) {
   double worst = 0.0;
   int n = (int)lround(10.0 / m->dt);
   for (int k = 0; k < n; k++) {
-    urt_command_t c;
-    memset(&c, 0, sizeof c);
-    urt_traj_eval(&tr, d->t, c.q, c.qd, c.qdd);
-    assert_int_equal(urt_command_set(m, d, &c), 0);
-    assert_int_equal(urt_step(m, d), 0);
+    assert_int_equal(traj_step(m, d, &tr), 0);
     for (int j = 0; j < URT_NJ; j++) {
       worst = fmax(worst, fabs(d->cmd.q[j] - d->x[j][URT_X_Q]));
     }
@@ -272,11 +277,7 @@ static double pickplace_wrist2_friction_max(const char *rate) {
   double worst = 0.0;
   const int n = (int)lround(9.0 / m->dt);
   for (int k = 0; k < n; k++) {
-    urt_command_t c;
-    memset(&c, 0, sizeof c);
-    urt_traj_eval(&tr, d->t, c.q, c.qd, c.qdd);
-    assert_int_equal(urt_command_set(m, d, &c), 0);
-    assert_int_equal(urt_step(m, d), URT_OK);
+    assert_int_equal(traj_step(m, d, &tr), URT_OK);
     urt_data_update_outputs(m, d);
     worst = fmax(worst, fabs(d->t_f[4]));
   }
@@ -313,11 +314,7 @@ static void run_backlash_excitation(double width) {
   assert_int_equal(urt_traj_make_excitation(&tr, m->q0, NULL, 1), 0);
   int n = (int)lround(10.0 / m->dt);
   for (int k = 0; k < n; k++) {
-    urt_command_t c;
-    memset(&c, 0, sizeof c);
-    urt_traj_eval(&tr, d->t, c.q, c.qd, c.qdd);
-    assert_int_equal(urt_command_set(m, d, &c), 0);
-    if (urt_step(m, d) != URT_OK) {
+    if (traj_step(m, d, &tr) != URT_OK) {
       print_message("backlash %.3g rad: stopped at t = %.4f s\n", width, d->t);
       fail();
     }
