@@ -644,7 +644,9 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
       fp.asym *= fp.f_c / f_c;
       fp.f_c = f_c;
     }
-    if (fp.enabled) {
+    // the bound on z of changed levels (joint_reset gave the others the model's, the same
+    // expression evaluated once by integrator_prepare: two exp and two pow a joint saved)
+    if (fp.enabled && (fr_scale[j] != 1.0 || drag[j] > 0.0)) {
       const double qd_max = m->joint[j].qd_max;
       fs.joint[j].z_max =
           std::fmax(urt_friction_g(&fp, qd_max), urt_friction_g(&fp, -qd_max)) / fp.sigma0;
