@@ -9,6 +9,7 @@
 
 #include "urt/core.h"
 #include "integrator.hpp"
+#include "joint.hpp"
 #include "urt/controller.h"
 #include "urt/faults.h"
 
@@ -153,7 +154,8 @@ void joint_reset(const urt_model_t* m, int j, urt_fault_joint_t* e) {
 
 // The friction parameters joint j runs on now: its fault's, or the model's.
 const urt_friction_params_t& friction_now(const urt_model_t* m, const urt_data_t* d, int j) {
-  return ((d->faults.joint_mask >> j) & 1u) ? d->faults.joint[j].friction : m->friction[j];
+  const urt_fault_joint_t* fj = urt::core::joint_fault(d, j);
+  return fj ? fj->friction : m->friction[j];
 }
 
 // LuGre's bristles carry at most g(q̇)/σ0: its own solutions keep |z| within that. When a fault

@@ -37,8 +37,8 @@ bool states_finite(const double (*x)[URT_NXJ]) noexcept {
 // within 1.5 g(q̇)/σ0 at the speed it has reached, the bristles are still plausible. Evaluated
 // only when z is beyond 1.5 z_max.
 bool bristles_within_speed_level(const urt_model_t* m, const urt_data_t* d, int j) {
-  const urt_friction_params_t& fp =
-      ((d->faults.joint_mask >> j) & 1u) ? d->faults.joint[j].friction : m->friction[j];
+  const urt_fault_joint_t* fj = urt::core::joint_fault(d, j);
+  const urt_friction_params_t& fp = fj ? fj->friction : m->friction[j];
   return std::fabs(d->x[j][URT_X_Z]) <= 1.5 * urt_friction_g(&fp, d->x[j][URT_X_QD]) / fp.sigma0;
 }
 
@@ -81,6 +81,18 @@ bool step_rough(const urt_model_t* m, const urt_data_t* d, const double (*x0)[UR
     rough = rough || std::fabs(a - d->qdd[j]) > 10.0 * m->joint[j].qdd_max;
   }
   return rough;
+}
+
+// Undo the step and redo it from x0 as fine steps of the whole model, kind kSub (n_sub of
+// them) or kFine (kFinePerSub times as many); each redo counts in refined_count.
+void redo_as(const urt_model_t* m, urt_data_t* d, const double (*x0)[URT_NXJ], int kind) {
+  std::memcpy(d->x, x0, sizeof d->x);
+  const urt_integrator_tables* tab = m->tables;
+  const int n = tab->n_sub * (kind == urt::core::kFine ? urt::core::kFinePerSub : 1);
+  for (int k = 0; k < n; k++) {
+    urt::core::integrator_step(m, d, kind, k * tab->h[kind]);
+  }
+  d->refined_count++;
 }
 
 // The command describes a quadratic from the step's start; carry it to the next step's start
@@ -169,25 +181,14 @@ extern "C" int urt_step(const urt_model_t* m, urt_data_t* d) {
   // every N-th step, so that its cost can be measured where healthy runs never take it.
   const bool forced = m->refine_every != 0 && (d->steps + 1) % m->refine_every == 0;
   if (forced || !step_plausible(m, d) || step_rough(m, d, x0)) {
-    std::memcpy(d->x, x0, sizeof x0);
-    const urt_integrator_tables* tab = m->tables;
-    for (int k = 0; k < tab->n_sub; k++) {
-      urt::core::integrator_step(m, d, urt::core::kSub, k * tab->h[urt::core::kSub]);
-    }
-    d->refined_count++;
+    redo_as(m, d, x0, urt::core::kSub);
   }
   // still implausible: once more at a quarter of the sub-step. A backlash impact (the circular
   // spline's contact rings near 45 kHz on the shoulder) can shake a stuck wrist loose within
   // one step, a reversal that 5 µs sub-steps still overshoot (bristles beyond 1.5 g/σ0, seed 1
   // of the dataset demo's shoulder backlash at 1.45 and 2.9 mrad); 1.25 µs resolve it.
   if (!step_plausible(m, d)) {
-    std::memcpy(d->x, x0, sizeof x0);
-    const urt_integrator_tables* tab = m->tables;
-    const int n_fine = tab->n_sub * urt::core::kFinePerSub;
-    for (int k = 0; k < n_fine; k++) {
-      urt::core::integrator_step(m, d, urt::core::kFine, k * tab->h[urt::core::kFine]);
-    }
-    d->refined_count++;
+    redo_as(m, d, x0, urt::core::kFine);
   }
   if (!step_plausible(m, d)) {
     std::memcpy(d->x, x0, sizeof x0);
