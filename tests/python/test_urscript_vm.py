@@ -171,8 +171,10 @@ def test_a_protective_stop_pauses_the_program_and_play_runs_the_move_again():
             d.close()
             run_msgs = []
             t_end = time.monotonic() + 10
+            # until the program's end is announced too: its key message follows "arrived" and
+            # may come in a later read
             while time.monotonic() < t_end and not any(
-                    m["type"] == 0 and m["text"] == "arrived" for m in run_msgs):
+                    m["type"] == 7 and m["title"] == "PROGRAM_XXX_STOPPED" for m in run_msgs):
                 run_msgs += pr.robot_messages(0.2)
             end = rt_now(emu.host)
     errors = [(m["code"], m["argument"], m["level"]) for m in stop_msgs if m["type"] == 6]
