@@ -384,7 +384,7 @@ void load_joints(const Field &f, const urt_harmonic_drive_params_t gear[2],
 
     // friction: the common LuGre part plus this joint's levels and Stribeck dip;
     // g(0) = f_c (1 ± a)(1 + K_s) > 0 needs f_c > 0 and |a| < 1
-    Map fr = s["friction"].map({"f_c", "f_v", "k_q", "k_static", "qd_s", "asym"});
+    Map fr = s["friction"].map({"f_c", "f_v", "k_q", "k_static", "qd_s", "asym", "relax"});
     urt_friction_params_t *fp = &m->friction[j];
     *fp = fric;
     fp->f_c = fr["f_c"].number(gt(0.0));
@@ -393,6 +393,7 @@ void load_joints(const Field &f, const urt_harmonic_drive_params_t gear[2],
     fp->k_static = fr["k_static"].number(in(0.0, 10.0));
     fp->qd_s = fr["qd_s"].number(in_lo_open(0.0, 100.0));
     fp->asym = fr["asym"].number(in_open(-1.0, 1.0, "in (-1, 1)"));
+    fp->relax = fr["relax"].number(in(0.0, 1000.0));
 
     // sensors: common settings, ADC quantum from this joint's i_max
     m->sensors[j] = sc.common;

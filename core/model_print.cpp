@@ -423,6 +423,7 @@ void print_joint(Emitter &e, const urt_model_t *m, int j) {
   e.num("f_v", f->f_v, "N m (s/rad)^(2/3)");
   e.num("k_q", f->k_q, "-");
   e.num("asym", f->asym, "-");
+  e.num("relax", f->relax, "1/s");
   e.end_map();
 
   const urt_sensors_params_t *s = &m->sensors[j];

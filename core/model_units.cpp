@@ -94,6 +94,7 @@ const KeyUnit kUnits[] = {
     {"joints[].friction.k_static", "-"},
     {"joints[].friction.qd_s", "rad/s"},
     {"joints[].friction.asym", "-"},
+    {"joints[].friction.relax", "1/s"},
     // the payload (issue 10 item 1); harmless while the file has no payload section
     {"payload.mass", "kg"},
     // as urt_model_print writes them (the payload's own frame and reference point)

@@ -463,7 +463,7 @@ static void test_model_load__loads_per_joint_friction_and_current_offset(void **
   (void)state;
   const char *const set[] = {"joints.4.friction.k_static=0.7", "joints.4.friction.qd_s=0.2",
                              "joints.4.friction.asym=-0.25", "joints.2.current_offset=0.4",
-                             NULL};
+                             "joints.5.friction.relax=300", NULL};
   urt_model_t *m = NULL;
   char err[512] = "";
   int rc = urt_model_load(urt_test_path("config/ur5.yaml"), set, &m, err, sizeof err);
@@ -472,10 +472,12 @@ static void test_model_load__loads_per_joint_friction_and_current_offset(void **
   assert_near(m->friction[4].qd_s, 0.2, 0.0);
   assert_near(m->friction[4].asym, -0.25, 0.0);
   assert_near(m->joint[2].i_offset, 0.4, 0.0);
+  assert_near(m->friction[5].relax, 300.0, 0.0);
   // the others keep the paper's shared values
   assert_near(m->friction[3].k_static, 0.3, 0.0);
   assert_near(m->friction[3].qd_s, 0.5, 0.0);
   assert_near(m->friction[3].asym, 0.0, 0.0);
+  assert_near(m->friction[3].relax, 0.0, 0.0);
   assert_near(m->joint[1].i_offset, 0.0, 0.0);
   urt_model_free(m);
 }
@@ -487,6 +489,13 @@ static void test_model_load__rejects_asymmetry_of_one(void **state) {
   const char *const set[] = {"joints.1.friction.asym=1", NULL};
   expect_error(ur5_text, set, URT_ECONFIG,
                ":override: joints[1].friction.asym: must be in (-1, 1) (got 1)");
+}
+
+static void test_model_load__rejects_a_negative_bristle_relaxation(void **state) {
+  (void)state;
+  const char *const set[] = {"joints.3.friction.relax=-1", NULL};
+  expect_error(ur5_text, set, URT_ECONFIG,
+               ":override: joints[3].friction.relax: must be in [0, 1000] (got -1)");
 }
 
 static void test_model_load__rejects_current_offset_beyond_a_fifth_of_i_max(void **state) {
@@ -592,6 +601,7 @@ int main(void) {
       cmocka_unit_test(test_model_load__truncates_long_message_to_err_sz),
       cmocka_unit_test(test_model_load__loads_per_joint_friction_and_current_offset),
       cmocka_unit_test(test_model_load__rejects_asymmetry_of_one),
+      cmocka_unit_test(test_model_load__rejects_a_negative_bristle_relaxation),
       cmocka_unit_test(test_model_load__rejects_current_offset_beyond_a_fifth_of_i_max),
       cmocka_unit_test(test_model_load__rejects_bad_override_value),
       cmocka_unit_test(test_model_load__thermal_by_drive_size),

@@ -6,7 +6,7 @@
 #include "urt/drivers/friction.h"
 #include "urt/drivers/friction_inline.h"
 
-static const urt_friction_params_t kWrist = {1, 5e6, 100, 0.5, 0.3, 2.0, 2.0, 10.0, 0.0};
+static const urt_friction_params_t kWrist = {1, 5e6, 100, 0.5, 0.3, 2.0, 2.0, 10.0, 0.0, 0.0};
 
 static void test_friction_g__is_even_and_finite_for_negative_speed(void **state) {
   (void)state;
@@ -76,6 +76,28 @@ static void test_friction__disabled_is_zero(void **state) {
   assert_near(o.dz, 0.0, 0.0);
 }
 
+// Bristle relaxation λ: at rest ż = −λ z (the stuck friction decays); in sliding it lowers the
+// steady deflection to q̇/(σ0 |q̇|/g + λ); λ = 0 is the paper's law.
+static void test_friction__relaxation_decays_stuck_bristles_and_zero_is_the_paper(void **state) {
+  (void)state;
+  urt_friction_params_t p = kWrist;
+  p.relax = 300.0;
+  const double z = 2e-7;
+  urt_friction_out_t o = urt_friction_eval(&p, &(urt_friction_state_t){z}, 0.0);
+  assert_near(o.dz, -300.0 * z, 1e-20);
+  assert_near(o.ddz_dz, -300.0, 0.0);
+  assert_near(o.t_f, p.sigma0 * z + p.sigma1 * o.dz, 1e-12);
+  const double v = 0.01, g = urt_friction_g(&p, v);
+  const double z_ss = v / (p.sigma0 * v / g + p.relax);
+  assert_near(urt_friction_eval(&p, &(urt_friction_state_t){z_ss}, v).dz, 0.0, 1e-15);
+  // 1.6 % below g at 10 mrad/s: σ0 |q̇|/g ≈ 1.9e4 against λ = 300
+  assert_true(p.sigma0 * z_ss < g && p.sigma0 * z_ss > 0.98 * g);
+  // λ = 0: the paper's ż = q̇ − σ0 |q̇| z/g
+  p.relax = 0.0;
+  o = urt_friction_eval(&p, &(urt_friction_state_t){z}, v);
+  assert_true(o.dz == v - p.sigma0 * (v / g) * z);
+}
+
 // The friction law's own cube root (friction_inline.h) against long double cbrtl rounded to
 // double: at most 1 ulp off, over the speeds a joint sees, and the edge cases pass through.
 static void test_friction_cbrt__is_within_one_ulp_of_cbrtl(void **state) {
@@ -143,6 +165,7 @@ int main(void) {
       cmocka_unit_test(test_friction_dg__stribeck_dip_is_about_minus_3_7),
       cmocka_unit_test(test_friction__asymmetry_scales_the_coulomb_level_per_direction),
       cmocka_unit_test(test_friction__disabled_is_zero),
+      cmocka_unit_test(test_friction__relaxation_decays_stuck_bristles_and_zero_is_the_paper),
       cmocka_unit_test(test_friction_cbrt__is_within_one_ulp_of_cbrtl),
       cmocka_unit_test(test_friction__below_breakaway_a_constant_load_sticks_without_drift),
   };

@@ -3,7 +3,7 @@
  * sign convention of model.md §1.6.
  *
  *   T_f  = σ0 z + σ1 ż               (acts against the joint: T_u = T_CS − T_f)
- *   ż    = q̇ − σ0 |q̇| z / g(q̇)
+ *   ż    = q̇ − σ0 |q̇| z / g(q̇) − λ z
  *   g(q̇) = f_c,± [1 + K_s exp(−k_q |q̇| / q̇_s)] + f_v |q̇|^{2/3}    (> 0)
  *   f_c,± = f_c (1 ± a)   for q̇ > 0 / q̇ < 0   (f_c at q̇ = 0, where g does not enter ż)
  *
@@ -31,6 +31,7 @@ typedef struct urt_friction_params {
   double f_v;        /* viscous level (|q̇|^{2/3} law)         [N m (s/rad)^{2/3}] */
   double k_q;        /* Stribeck shape factor                 [-]          */
   double asym;       /* direction asymmetry a of f_c, |a| < 1 [-]          */
+  double relax;      /* bristle relaxation rate λ ≥ 0 (0: the paper's law) [1/s] */
 } urt_friction_params_t;
 
 typedef struct urt_friction_state {

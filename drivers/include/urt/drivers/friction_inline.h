@@ -74,6 +74,11 @@ static inline urt_friction_out_t urt_friction_eval_inline(const urt_friction_par
   double r = v / g;
   out.dz = qd - p->sigma0 * r * z;
   out.ddz_dz = -p->sigma0 * r;
+  if (p->relax > 0.0) {
+    // stuck bristles relax (− λ z): a held joint lets go of the friction it stopped with
+    out.dz -= p->relax * z;
+    out.ddz_dz -= p->relax;
+  }
 
   // d(|q̇|/g)/dq̇ = sgn(q̇) [1/g − |q̇| g'(|q̇|)/g²]
   double sgn = qd > 0.0 ? 1.0 : (qd < 0.0 ? -1.0 : 0.0);
