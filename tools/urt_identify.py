@@ -4,7 +4,7 @@
 
   urt_identify.py FILES... --out config/overlays/NAME.yaml [--holdout FILE...]
                   [--config config/ur5.yaml] [--name NAME] [--max-iter N] [--no-arm]
-                  [--hold-settle S] [--leave-one-out]
+                  [--hold-settle S] [--rest-model W] [--relax L...] [--leave-one-out]
 
 Fits, by physically bounded least squares (scipy.optimize.least_squares, trust-region
 reflective), the measured motor currents `actual_current_j` against the current a fast
@@ -31,7 +31,11 @@ per joint RMS(measured), RMS(twin − measured), RMS(UR target_current − measu
 and whether the joint moves. --leave-one-out fits on all FILES but one and judges that one, for
 each (a fold whose replay fails is reported and counted as failed). --hold-settle S also fits a
 moving joint's holds from S seconds after its set-point stopped (default 0: not at all;
-config/overlays/README.md). Exit status: 0 done, 1 run-time failure (twin replay), 2 usage or
+config/overlays/README.md). --rest-model W (default 10) fits the holding current, where the whole
+arm rests, to the recording's target_current (the controller's gravity model there) with weight
+W, not to the measured current, which carries the friction the drive was left holding. --relax
+L... (default 0 100 300 1000 [1/s]) chooses each joint's bristle relaxation rate from those by
+the twin's replay of the fit files with the overlay (0 alone: no replays, no relax keys). Exit status: 0 done, 1 run-time failure (twin replay), 2 usage or
 input error (a bad recording reads file:line: reason).
 """
 
@@ -441,57 +445,90 @@ def replay_table(path, summary, moving, label):
 #---- main ----
 
 def relax_sets(lam):
-    return [f"joints.{j}.friction.relax={lam:g}" for j in range(NJ)]
+    """--set arguments giving joint j the rate lam[j] (a number: every joint)."""
+    lam = np.broadcast_to(np.asarray(lam, dtype=float), (NJ,))
+    return [f"joints.{j}.friction.relax={lam[j]:g}" for j in range(NJ)]
+
+
+def replay_ratios(recs, out, config, lam):
+    """Per file and joint RMS(twin − measured)/RMS(measured) and RMS(twin − measured), the
+    twin replaying the fit files with the overlay and rates lam; and which joints move."""
+    ratio, err, moving = [], [], []
+    for r in recs:
+        summ = replay(r.path, overlay=out, config=config, sets=relax_sets(lam))
+        moving.append((r["target_q"].max(axis=0) - r["target_q"].min(axis=0)) > MOVE_RANGE)
+        ratio.append([js["rms_err_twin"] / max(js["rms_meas"], 1e-9) for js in summ["joints"]])
+        err.append([js["rms_err_twin"] for js in summ["joints"]])
+    return np.array(ratio), np.array(err), np.array(moving)
+
+
+def joint_score(ratio, moving, j):
+    """Joint j's mean RMS(twin − measured)/RMS(measured) over the files where it moves (over
+    all files if it moves in none)."""
+    return ratio[moving[:, j], j].mean() if moving[:, j].any() else ratio[:, j].mean()
 
 
 def choose_relax(recs, out, config, quiet):
-    """The bristle relaxation rate λ (one for every joint) by the twin's own replay of the fit
-    files with the overlay just written: each of RELAX_GRID, scored by the mean over files and
-    moving joints of RMS(twin − measured)/RMS(measured). The surrogate's steady law cannot see
-    it: λ acts where a joint stands still while held by its position loop, letting go of the
-    friction it stopped with as the real drives do (no1's wrist 3 stands at 8–12 s while the
-    base turns: the real current relaxes from 0.2 A to 0 within ~2 s; with λ = 0 the twin holds
-    the 0.2 A of stiction it stopped with). Returns (λ, per-joint twin RMS error over the files
-    at that λ)."""
-    best = None
+    """The bristle relaxation rate λ_j per joint by the twin's own replay of the fit files with
+    the overlay just written. Every file is replayed at each rate of RELAX_GRID given to all
+    joints; joint j takes the rate with the lowest mean over the files where it moves (all
+    files if it moves in none) of RMS(twin − measured)/RMS(measured): a joint's rate acts
+    mostly on its own current, so one replay per file and rate serves all six. The surrogate's
+    steady law cannot see λ: it acts where a joint stands still while held by its position
+    loop, letting go of the friction it stopped with as the real drives do (no1's wrist 3
+    stands at 8–12 s while the base turns: the real current relaxes from 0.2 A to 0 within
+    ~2 s; with λ = 0 the twin holds the 0.2 A of stiction it stopped with). The chosen set is
+    replayed once more and kept only if it scores at least as well as the best single rate.
+    Returns (λ per joint, per-joint twin RMS error over the files at those rates)."""
+    tried = []
     for lam in RELAX_GRID:
-        ratios, err2, n = [], np.zeros(NJ), np.zeros(NJ)
         try:
-            for r in recs:
-                summ = replay(r.path, overlay=out, config=config, sets=relax_sets(lam))
-                moving = (r["target_q"].max(axis=0) - r["target_q"].min(axis=0)) > MOVE_RANGE
-                for j, js in enumerate(summ["joints"]):
-                    err2[j] += js["rms_err_twin"] ** 2 * len(r.t)
-                    n[j] += len(r.t)
-                    if moving[j]:
-                        ratios.append(js["rms_err_twin"] / max(js["rms_meas"], 1e-9))
+            ratio, err, moving = replay_ratios(recs, out, config, lam)
         except RuntimeError as e:
             if not quiet:
                 print(f"relax {lam:g} 1/s: the twin's replay failed ({e}); not taken", flush=True)
             continue
-        score = float(np.mean(ratios))
+        tried.append((lam, ratio, err))
         if not quiet:
-            print(f"relax {lam:g} 1/s: mean RMS(twin - measured)/RMS(measured) {score:.4f} "
-                  f"over the fit files' moving joints", flush=True)
-        if best is None or score < best[0]:
-            best = (score, lam, np.sqrt(err2 / np.maximum(n, 1)))
-    if best is None:
+            print(f"relax {lam:g} 1/s: mean RMS(twin - measured)/RMS(measured) "
+                  f"{ratio[moving].mean():.4f} over the fit files' moving joints; per joint "
+                  + " ".join(f"{joint_score(ratio, moving, j):.4f}" for j in range(NJ)),
+                  flush=True)
+    if not tried:
         raise RuntimeError("the twin cannot replay the fit files at any --relax rate")
-    return best[1], best[2]
+
+    per_joint = np.array([min(tried, key=lambda t: joint_score(t[1], moving, j))[0]
+                          for j in range(NJ)])
+    single = min(tried, key=lambda t: t[1][moving].mean())
+    err2 = lambda err: np.sqrt(np.mean(err ** 2, axis=0))
+    if len(set(per_joint.tolist())) > 1:
+        try:
+            ratio, err, _ = replay_ratios(recs, out, config, per_joint)
+            if not quiet:
+                print("relax per joint " + " ".join(f"{v:g}" for v in per_joint) +
+                      f" 1/s: mean RMS(twin - measured)/RMS(measured) "
+                      f"{ratio[moving].mean():.4f}", flush=True)
+            if ratio[moving].mean() <= single[1][moving].mean():
+                return per_joint, err2(err)
+        except RuntimeError as e:
+            if not quiet:
+                print(f"relax per joint: the twin's replay failed ({e}); not taken", flush=True)
+    return np.full(NJ, single[0]), err2(single[2])
 
 
 def append_relax(path, lam, per_joint, units, files):
-    if lam == 0.0:
+    if not np.any(lam):
         return []
     unit = unit_of(units, "joints.0.friction.relax")
     if unit is None:
         raise UsageError("urt_config prints no unit for joints.0.friction.relax")
     from_list = ", ".join(f.path.name for f in files)
     text = Path(path).read_text().replace("set: {}\n", "set:\n")
-    lines = [f"  joints.{j}.friction.relax: {{value: {fmt(lam)}, unit: \"{unit}\", "
-             f"from: [{from_list}], residual: {per_joint[j]:.4g}}}" for j in range(NJ)]
+    lines = [f"  joints.{j}.friction.relax: {{value: {fmt(float(lam[j]))}, unit: \"{unit}\", "
+             f"from: [{from_list}], residual: {per_joint[j]:.4g}}}" for j in range(NJ)
+             if lam[j] != 0.0]
     Path(path).write_text(text + "\n".join(lines) + "\n")
-    return [f"joints.{j}.friction.relax" for j in range(NJ)]
+    return [f"joints.{j}.friction.relax" for j in range(NJ) if lam[j] != 0.0]
 
 
 def fit_and_write(recs, out, a, argv, params, units, arm, drives):
@@ -503,7 +540,8 @@ def fit_and_write(recs, out, a, argv, params, units, arm, drives):
     if len(RELAX_GRID) > 1 or RELAX_GRID[0] != 0.0:
         lam, twin_err = choose_relax(recs, out, a.config, a.quiet)
         keys = list(keys) + append_relax(out, lam, twin_err, units, recs)
-        print(f"bristle relaxation: {lam:g} 1/s (the twin's replay of the fit files)")
+        print("bristle relaxation per joint: " + " ".join(f"{v:g}" for v in lam) +
+              " 1/s (the twin's replay of the fit files)")
     print(f"wrote {out}: {len(keys)} keys; surrogate RMS residual per joint [A]: "
           + " ".join(f"{v:.3f}" for v in per_joint))
     if not a.quiet:
