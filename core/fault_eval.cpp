@@ -152,12 +152,6 @@ void joint_reset(const urt_model_t* m, int j, urt_fault_joint_t* e) {
   e->z_max = m->tables ? m->tables->z_max[j] : 0.0;
 }
 
-// The friction parameters joint j runs on now: its fault's, or the model's.
-const urt_friction_params_t& friction_now(const urt_model_t* m, const urt_data_t* d, int j) {
-  const urt_fault_joint_t* fj = urt::core::joint_fault(d, j);
-  return fj ? fj->friction : m->friction[j];
-}
-
 // LuGre's bristles carry at most g(q̇)/σ0: its own solutions keep |z| within that. When a fault
 // lowers a joint's Coulomb level (a brake drag released, an intermittent window closing, a
 // lubricant fault cleared), bristles loaded beyond the new level slip to it at once instead of
@@ -361,7 +355,7 @@ extern "C" int urt_data_clear_faults(const urt_model_t* m, urt_data_t* d, int cl
     // where that lowers a joint's friction level its bristles slip to the model's
     double fc_before[URT_NJ];
     for (int j = 0; j < URT_NJ; j++) {
-      fc_before[j] = friction_now(m, d, j).f_c;
+      fc_before[j] = urt::core::friction_now(m, d, j).f_c;
     }
     std::memset(&fs, 0, sizeof fs);
     for (int j = 0; j < URT_NJ; j++) {
@@ -446,7 +440,7 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
   // each joint's Coulomb level before this update: where it falls, the bristles follow (below)
   double fc_before[URT_NJ];
   for (int j = 0; j < URT_NJ; j++) {
-    fc_before[j] = friction_now(m, d, j).f_c;
+    fc_before[j] = urt::core::friction_now(m, d, j).f_c;
   }
 
   // the joints any fault targets get the model's parameters back, then every fault's effect
@@ -656,7 +650,7 @@ extern "C" void urt_faults_advance(const urt_model_t* m, urt_data_t* d) {
   }
   fs.joint_mask = mask;
   for (int j = 0; j < URT_NJ; j++) {
-    const urt_friction_params_t& fp = friction_now(m, d, j);
+    const urt_friction_params_t& fp = urt::core::friction_now(m, d, j);
     if (fp.f_c < fc_before[j]) {
       bristles_to_level(fp, d->x[j]);
     }

@@ -55,6 +55,13 @@ inline const urt_fault_joint_t* joint_fault(const urt_data_t* d, int j) noexcept
   return ((d->faults.joint_mask >> j) & 1u) ? &d->faults.joint[j] : nullptr;
 }
 
+// The friction parameters joint j runs on now: its fault's, or the model's. Context: RT.
+inline const urt_friction_params_t& friction_now(const urt_model_t* m, const urt_data_t* d,
+                                                 int j) noexcept {
+  const urt_fault_joint_t* fj = joint_fault(d, j);
+  return fj ? fj->friction : m->friction[j];
+}
+
 // The joint encoder's reading: its filter's output p plus the held error eps_q, through a
 // sensor fault when the joint has one (a stuck value, a bias, noise). Context: RT.
 inline double joint_q_reading(double p, double eps_q, const urt_fault_joint_t* fj) noexcept {

@@ -37,8 +37,7 @@ bool states_finite(const double (*x)[URT_NXJ]) noexcept {
 // within 1.5 g(q̇)/σ0 at the speed it has reached, the bristles are still plausible. Evaluated
 // only when z is beyond 1.5 z_max.
 bool bristles_within_speed_level(const urt_model_t* m, const urt_data_t* d, int j) {
-  const urt_fault_joint_t* fj = urt::core::joint_fault(d, j);
-  const urt_friction_params_t& fp = fj ? fj->friction : m->friction[j];
+  const urt_friction_params_t& fp = urt::core::friction_now(m, d, j);
   return std::fabs(d->x[j][URT_X_Z]) <= 1.5 * urt_friction_g(&fp, d->x[j][URT_X_QD]) / fp.sigma0;
 }
 
