@@ -189,6 +189,11 @@ class Spec:
 
 #---- data ----
 
+def moving_joints(rec):
+    """Which joints move in a recording: range of target_q over MOVE_RANGE (issue 10)."""
+    return (rec["target_q"].max(axis=0) - rec["target_q"].min(axis=0)) > MOVE_RANGE
+
+
 class FitData:
     """One recording with its regressor, ready for the surrogate."""
 
@@ -199,7 +204,7 @@ class FitData:
         self.qd, self.qdd = qd, qdd
         self.i_meas = rec["actual_current"]
         self.y = arm.regressor(q, qd, qdd)
-        self.moving = (q.max(axis=0) - q.min(axis=0)) > MOVE_RANGE
+        self.moving = moving_joints(rec)
         # Near a reversal the set-point's sign of q̇ leads the joint's, and the friction there
         # (a jump of 2 f_c within µrad of bristle travel) is the twin's dynamics, not the
         # surrogate's steady law: those samples of a moving joint are left out of the fit.
@@ -357,6 +362,16 @@ def changed_keys(spec, x, x_paper):
     return out
 
 
+def overlay_entry(key, val, units, from_list, resid):
+    """One `set:` line of an overlay: value, unit as urt_config prints it, source files and
+    the RMS current residual [A]."""
+    unit = unit_of(units, key)
+    if unit is None:
+        raise UsageError(f"urt_config prints no unit for {key}")
+    return (f"  {key}: {{value: {fmt(val)}, unit: \"{unit}\", from: [{from_list}], "
+            f"residual: {resid:.4g}}}")
+
+
 def write_overlay(path, name, base, argv, spec, res, per_joint, units, files, params):
     x_paper = np.array([_paper_value(params, r) for r in spec.rows])
     keys = changed_keys(spec, res.x, x_paper)
@@ -376,12 +391,8 @@ def write_overlay(path, name, base, argv, spec, res, per_joint, units, files, pa
         "set:",
     ]
     for key, val in keys.items():
-        unit = unit_of(units, key)
-        if unit is None:
-            raise UsageError(f"urt_config prints no unit for {key}")
         resid = float(np.sqrt(np.mean(per_joint[list(joints_of[key])] ** 2)))
-        lines.append(f"  {key}: {{value: {fmt(val)}, unit: \"{unit}\", from: [{from_list}], "
-                     f"residual: {resid:.4g}}}")
+        lines.append(overlay_entry(key, val, units, from_list, resid))
     if not keys:
         lines[-1] = "set: {}"
     Path(path).parent.mkdir(parents=True, exist_ok=True)
@@ -452,14 +463,13 @@ def relax_sets(lam):
 
 def replay_ratios(recs, out, config, lam):
     """Per file and joint RMS(twin − measured)/RMS(measured) and RMS(twin − measured), the
-    twin replaying the fit files with the overlay and rates lam; and which joints move."""
-    ratio, err, moving = [], [], []
+    twin replaying the fit files with the overlay and rates lam."""
+    ratio, err = [], []
     for r in recs:
         summ = replay(r.path, overlay=out, config=config, sets=relax_sets(lam))
-        moving.append((r["target_q"].max(axis=0) - r["target_q"].min(axis=0)) > MOVE_RANGE)
         ratio.append([js["rms_err_twin"] / max(js["rms_meas"], 1e-9) for js in summ["joints"]])
         err.append([js["rms_err_twin"] for js in summ["joints"]])
-    return np.array(ratio), np.array(err), np.array(moving)
+    return np.array(ratio), np.array(err)
 
 
 def joint_score(ratio, moving, j):
@@ -480,10 +490,11 @@ def choose_relax(recs, out, config, quiet):
     ~2 s; with λ = 0 the twin holds the 0.2 A of stiction it stopped with). The chosen set is
     replayed once more and kept only if it scores at least as well as the best single rate.
     Returns (λ per joint, per-joint twin RMS error over the files at those rates)."""
+    moving = np.array([moving_joints(r) for r in recs])
     tried = []
     for lam in RELAX_GRID:
         try:
-            ratio, err, moving = replay_ratios(recs, out, config, lam)
+            ratio, err = replay_ratios(recs, out, config, lam)
         except RuntimeError as e:
             if not quiet:
                 print(f"relax {lam:g} 1/s: the twin's replay failed ({e}); not taken", flush=True)
@@ -503,7 +514,7 @@ def choose_relax(recs, out, config, quiet):
     err2 = lambda err: np.sqrt(np.mean(err ** 2, axis=0))
     if len(set(per_joint.tolist())) > 1:
         try:
-            ratio, err, _ = replay_ratios(recs, out, config, per_joint)
+            ratio, err = replay_ratios(recs, out, config, per_joint)
             if not quiet:
                 print("relax per joint " + " ".join(f"{v:g}" for v in per_joint) +
                       f" 1/s: mean RMS(twin - measured)/RMS(measured) "
@@ -517,18 +528,17 @@ def choose_relax(recs, out, config, quiet):
 
 
 def append_relax(path, lam, per_joint, units, files):
-    if not np.any(lam):
-        return []
-    unit = unit_of(units, "joints.0.friction.relax")
-    if unit is None:
-        raise UsageError("urt_config prints no unit for joints.0.friction.relax")
+    """Add the chosen non-zero rates to the overlay at path; their residual is the twin's
+    replay RMS error on the joint over the fit files (not the surrogate's)."""
     from_list = ", ".join(f.path.name for f in files)
+    keys = [j for j in range(NJ) if lam[j] != 0.0]
+    if not keys:
+        return []
     text = Path(path).read_text().replace("set: {}\n", "set:\n")
-    lines = [f"  joints.{j}.friction.relax: {{value: {fmt(float(lam[j]))}, unit: \"{unit}\", "
-             f"from: [{from_list}], residual: {per_joint[j]:.4g}}}" for j in range(NJ)
-             if lam[j] != 0.0]
+    lines = [overlay_entry(f"joints.{j}.friction.relax", float(lam[j]), units, from_list,
+                           per_joint[j]) for j in keys]
     Path(path).write_text(text + "\n".join(lines) + "\n")
-    return [f"joints.{j}.friction.relax" for j in range(NJ) if lam[j] != 0.0]
+    return [f"joints.{j}.friction.relax" for j in keys]
 
 
 def fit_and_write(recs, out, a, argv, params, units, arm, drives):
@@ -558,7 +568,7 @@ def fit_and_write(recs, out, a, argv, params, units, arm, drives):
 def judge(h, overlay, config):
     """Replay table of holdout h with the paper's parameters and with overlay; True when the
     twin's RMS current error is at most UR's on every joint that moves."""
-    moving = (h["target_q"].max(axis=0) - h["target_q"].min(axis=0)) > MOVE_RANGE
+    moving = moving_joints(h)
     base = replay(h.path, config=config)
     fitted = replay(h.path, overlay=overlay, config=config)
     print(replay_table(h.path, base, moving, "paper parameters")[0], flush=True)
