@@ -125,7 +125,10 @@ def test_bench_py__merges_everything_into_one_json(tmp_path):
     assert math.isfinite(rp["speed_median"]) and rp["speed_median"] > 0
     # per CPU second too (a shared machine's wall clock counts the others)
     assert math.isfinite(rp["speed_cpu_median"]) and rp["speed_cpu_median"] > 0
-    assert "urt_sim --replay" in proc.stdout
+    assert rp["rate_hz"] == 20000 and rp["at_10khz"]["rate_hz"] == 10000
+    # the same recording at half the rate: a replay judged at 125 Hz barely notices
+    assert 0 <= rp["at_10khz"]["max_rms_err_diff_a"] < 0.01
+    assert "urt_sim --replay" in proc.stdout and "--rate 10000" in proc.stdout
 
 
 def test_bench_physics_worst__reports_ordered_figures_and_the_motion_ran(tmp_path):
