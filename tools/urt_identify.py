@@ -31,7 +31,8 @@ per joint RMS(measured), RMS(twin − measured), RMS(UR target_current − measu
 and whether the joint moves. --leave-one-out fits on all FILES but one and judges that one, for
 each (a fold whose replay fails is reported and counted as failed). --hold-settle S also fits a
 moving joint's holds from S seconds after its set-point stopped (default 0: not at all;
-config/overlays/README.md). --rest-model W (default 10) fits the holding current, where the whole
+config/overlays/README.md). --rest-model W (default 10) fits the current the twin reports (holding torque and
+measurement offset), where the whole
 arm rests, to the recording's target_current (the controller's gravity model there) with weight
 W, not to the measured current, which carries the friction the drive was left holding. --relax
 L... (default 0 100 300 1000 [1/s]) chooses each joint's bristle relaxation rate from those by
@@ -246,25 +247,31 @@ def settled_holds(t, qd, settle):
     return out
 
 
-def predict(spec, x, params, arm, drives, fd, offset=True):
+def predict(spec, x, params, arm, drives, fd):
+    """The current the twin reports (its measurement offset included) at fd's set-points."""
     fr, off, mass, com, payload, kt = spec.unpack(x, params)
     tau = fd.y @ arm.pi(mass, com, payload)
-    return sur.current(drives, tau, fd.qd, fd.qdd, fr, off if offset else 0.0 * off, kt)
+    return sur.current(drives, tau, fd.qd, fd.qdd, fr, off, kt)
 
 
 def rest_model_residual(spec, x, params, arm, drives, fd, scale):
-    """Where the arm rests: the surrogate's holding current (without the measurement offset)
-    against the controller's own model current, weighted by REST_WEIGHT. The measured current
-    at rest is gravity plus whatever friction the drive was left holding when the arm stopped
-    (these recordings: the elbow holds 0.5–0.7 A below its level after a move up and above it
-    after a move down, relaxing over ~1 s and not always to the same level; the shoulder up
-    to 1 A), which the twin's steady holding current cannot follow; fitted to it alone, the
-    first moments bend to that history and extrapolate badly to poses the files do not hold
-    (no1's shoulder, fitted on the four other files: a mean error of +0.34 A). The
-    controller's model at rest is its gravity model alone."""
+    """Where the arm rests: the current the surrogate reports (holding torque and measurement
+    offset) against the controller's own model current, weighted by REST_WEIGHT. The measured
+    current at rest is gravity plus whatever friction the drive was left holding when the arm
+    stopped (these recordings: the elbow holds 0.5–0.7 A below its level after a move up and
+    above it after a move down, relaxing over ~1 s and not always to the same level; the
+    shoulder up to 1 A), which the twin's steady holding current cannot follow; fitted to it
+    alone, the first moments bend to that history and extrapolate badly to poses the files do
+    not hold (no1's shoulder, fitted on the four other files: a mean error of +0.34 A). The
+    controller's model at rest is its gravity model alone, and it predicts the current the
+    drive reports: the offset is held to it too. Left to the moves alone (session 26) the
+    shoulder's offset came out at −0.04…−0.09 A, where the measured current at rest stands
+    +0.20…+0.43 A over UR's model in every file that rests: not a zero the moves can see, and
+    it put the twin's rests 0.09 A under UR's (test_shoulder_elbow's fold: 0.517 A RMS against
+    UR's 0.498; 0.476 with the offset held here)."""
     if not fd.rest.any() or REST_WEIGHT == 0.0:
         return np.zeros(0)
-    p = predict(spec, x, params, arm, drives, fd, offset=False)
+    p = predict(spec, x, params, arm, drives, fd)
     return (REST_WEIGHT * fd.rest[:, None] * (p - fd.i_rest_model) / scale).ravel()
 
 

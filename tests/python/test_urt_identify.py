@@ -305,8 +305,7 @@ def rest_recording(arm, params, urt_identify):
     x = spec.x0.copy()
     x[[k for k, r in enumerate(spec.rows) if r[0] == "arm.links.1.com" and r[1] == 0]] += 0.02
     truth = urt_identify.predict(spec, x, params, arm, probe_drives(params), probe)
-    gravity = urt_identify.predict(spec, x, params, arm, probe_drives(params), probe,
-                                   offset=False)
+    gravity = truth  # the paper's offsets are 0: at rest the true current is the gravity's
     held = np.zeros_like(q)
     last = 0.0
     for k in range(len(t)):
@@ -346,13 +345,38 @@ def test_identify__rest_model_fits_the_holding_current_to_the_controllers_model(
             f = urt_identify.FitData(rec, arm)
             spec, res, _ = urt_identify.fit([f], params, arm, drives, "payload" in params, 60,
                                             quiet=True)
-            p = urt_identify.predict(spec, res.x, params, arm, drives, f, offset=False)
+            p = urt_identify.predict(spec, res.x, params, arm, drives, f)
         finally:
             urt_identify.REST_WEIGHT, urt_identify.HOLD_SETTLE = 10.0, 0.0
         return np.sqrt(np.mean((p[at_rest, 1] - gravity[at_rest, 1]) ** 2))
 
     assert holding_error(3.0, 0.0) < 0.02
     assert holding_error(0.0, 0.3) > 0.05
+
+
+def test_identify__rest_model_holds_the_reported_current_offset_included():
+    # UR's model predicts the current the drive reports: where the arm rests the surrogate's
+    # current with its measurement offset is what is held to it (fitted to the moves alone, the
+    # shoulder's offset put the twin's rests 0.09 A under UR's model in test_shoulder_elbow)
+    import urt_identify
+    import urt_surrogate
+    params, _ = urt_identify.resolved(str(ROOT / "config" / "ur5.yaml"))
+    arm = urt_surrogate.Arm(params)
+    rec, at_rest, _ = rest_recording(arm, params, urt_identify)
+    fd = urt_identify.FitData(rec, arm)
+    spec = urt_identify.Spec(params, fd.moving, "payload" in params)
+    drives = probe_drives(params)
+    x = spec.x0.copy()
+    x[[k for k, r in enumerate(spec.rows) if r[0] == "joints.1.current_offset"]] = 0.1
+    fd.i_rest_model = urt_identify.predict(spec, x, params, arm, drives, fd)
+    scale = np.ones(6)
+    assert np.abs(urt_identify.rest_model_residual(spec, x, params, arm, drives, fd,
+                                                   scale)).max() < 1e-12
+    # the same arm reporting 0.1 A less on the shoulder is 0.1·W off at every rest sample
+    x[[k for k, r in enumerate(spec.rows) if r[0] == "joints.1.current_offset"]] = 0.0
+    r = urt_identify.rest_model_residual(spec, x, params, arm, drives, fd, scale).reshape(-1, 6)
+    assert np.allclose(r[at_rest, 1], -0.1 * urt_identify.REST_WEIGHT)
+    assert np.abs(r[~at_rest]).max() == 0.0 and np.abs(r[:, [0, 2, 3, 4, 5]]).max() < 1e-12
 
 
 def test_identify__no_rest_model_without_target_current_and_a_bad_weight_is_refused(tmp_path):
