@@ -25,8 +25,8 @@ It prints one progress line per iteration, then writes the overlay: only the key
 each with value, unit (as urt_config/--print-model prints it), the files it came from and the
 fit's RMS current residual [A] on the joint(s) the key acts on (surrogate, fit files).
 
---holdout FILE... replays each file through the twin itself (urt_sim --replay FILE --overlay
-OUT --summary-json), with the paper's parameters and with the overlay, and prints the table:
+--holdout FILE... replays each file through the twin itself (tools/urt_replay_judge.py:
+urt_sim --replay FILE --overlay OUT --summary-json), with the paper's parameters and with the overlay, and prints the table:
 per joint RMS(measured), RMS(twin − measured), RMS(UR target_current − measured), their ratios,
 and whether the joint moves. --leave-one-out fits on all FILES but one and judges that one, for
 each (a fold whose replay fails is reported and counted as failed). --hold-settle S also fits a
@@ -42,11 +42,9 @@ input error (a bad recording reads file:line: reason).
 
 import argparse
 import json
-import os
 import re
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -54,11 +52,11 @@ from scipy.optimize import least_squares
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import urt_recording as rec_io  # noqa: E402
+import urt_replay_judge as judge_io  # noqa: E402
+from urt_replay_judge import NJ, UsageError, moving_joints, tool  # noqa: E402
 import urt_surrogate as sur  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-NJ = 6
-MOVE_RANGE = 0.05       # [rad] a joint "moves" in a file beyond this range (issue 10)
 V_MIN = 0.02            # [rad/s] samples of a moving joint slower than this are not fitted
 HOLD_SETTLE = 0.0       # [s] --hold-settle: … except in its holds from this long after its
                         # set-point stopped (0: not at all; config/overlays/README.md)
@@ -73,21 +71,6 @@ KT_BOUND = 0.10         # k_t within ± this fraction of the config's: the motor
 KT_PRIOR = 0.03         # scale of the weak pull towards the config's k_t (fraction)
 REST_WEIGHT = 10.0      # --rest-model W: weight of the controller's own model at rest (0: off)
 RELAX_GRID = (0.0, 100.0, 300.0, 1000.0)  # --relax: bristle relaxation rates tried [1/s]
-
-
-class UsageError(Exception):
-    pass
-
-
-def build_dir():
-    return Path(os.environ.get("URT_BUILD", ROOT / "build"))
-
-
-def tool(name):
-    path = build_dir() / "tools" / name
-    if not os.access(path, os.X_OK):
-        raise UsageError(f"{path} is not built (make build, or set URT_BUILD)")
-    return str(path)
 
 
 def resolved(config, sets=()):
@@ -189,11 +172,6 @@ class Spec:
 
 
 #---- data ----
-
-def moving_joints(rec):
-    """Which joints move in a recording: range of target_q over MOVE_RANGE (issue 10)."""
-    return (rec["target_q"].max(axis=0) - rec["target_q"].min(axis=0)) > MOVE_RANGE
-
 
 class FitData:
     """One recording with its regressor, ready for the surrogate."""
@@ -416,123 +394,7 @@ def _paper_value(params, row):
     return node[comp] if comp is not None else node
 
 
-#---- the twin's replay ----
-
-def replay(path, overlay=None, config=None, sets=()):
-    """The twin's replay summary of one recording (urt_sim --replay … --summary-json), with
-    --set KEY=VALUE for each of sets."""
-    sim = tool("urt_sim")
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "summary.json"
-        args = [sim, "--quiet", "--replay", str(path), "--summary-json", str(out)]
-        if config:
-            args += ["--config", str(config)]
-        if overlay:
-            args += ["--overlay", str(overlay)]
-        for kv in sets:
-            args += ["--set", kv]
-        r = subprocess.run(args, capture_output=True, text=True, cwd=ROOT)
-        if r.returncode != 0:
-            raise RuntimeError(f"urt_sim --replay {path} failed ({r.returncode}): "
-                               f"{r.stderr.strip()[-500:]}")
-        return json.loads(out.read_text())
-
-
-def replay_table(path, summary, moving, label):
-    """The replay table as markdown, and whether the twin's error is at most UR's on every
-    moving joint (True when the recording has no target_current to compare with)."""
-    names = ("base", "shoulder", "elbow", "wrist1", "wrist2", "wrist3")
-    f = lambda v, d=3: "-" if v is None else f"{v:.{d}f}"
-    rows = [f"{Path(path).name} ({label}): RMS current [A]",
-            "| joint | moves | RMS meas | RMS(twin-meas) | RMS(UR-meas) | ratio twin | ratio UR |"
-            " corr twin | twin <= UR |",
-            "|---|---|---|---|---|---|---|---|---|"]
-    ok = True
-    for j, js in enumerate(summary["joints"]):
-        ur = js["rms_err_ur"]
-        good = ur is None or js["rms_err_twin"] <= ur
-        if moving[j]:
-            ok &= good
-        verdict = ("yes" if good else "NO") if moving[j] and ur is not None else "-"
-        rows.append(f"| {names[j]} | {'yes' if moving[j] else 'no'} | {f(js['rms_meas'])} | "
-                    f"{f(js['rms_err_twin'])} | {f(ur)} | {f(js['ratio_twin'], 2)} | "
-                    f"{f(js['ratio_ur'], 2)} | {f(js['corr_twin'], 2)} | {verdict} |")
-    return "\n".join(rows), ok
-
-
 #---- main ----
-
-def relax_sets(lam):
-    """--set arguments giving joint j the rate lam[j] (a number: every joint)."""
-    lam = np.broadcast_to(np.asarray(lam, dtype=float), (NJ,))
-    return [f"joints.{j}.friction.relax={lam[j]:g}" for j in range(NJ)]
-
-
-def replay_ratios(recs, out, config, lam):
-    """Per file and joint RMS(twin − measured)/RMS(measured) and RMS(twin − measured), the
-    twin replaying the fit files with the overlay and rates lam."""
-    ratio, err = [], []
-    for r in recs:
-        summ = replay(r.path, overlay=out, config=config, sets=relax_sets(lam))
-        ratio.append([js["rms_err_twin"] / max(js["rms_meas"], 1e-9) for js in summ["joints"]])
-        err.append([js["rms_err_twin"] for js in summ["joints"]])
-    return np.array(ratio), np.array(err)
-
-
-def joint_score(ratio, moving, j):
-    """Joint j's mean RMS(twin − measured)/RMS(measured) over the files where it moves (over
-    all files if it moves in none)."""
-    return ratio[moving[:, j], j].mean() if moving[:, j].any() else ratio[:, j].mean()
-
-
-def choose_relax(recs, out, config, quiet):
-    """The bristle relaxation rate λ_j per joint by the twin's own replay of the fit files with
-    the overlay just written. Every file is replayed at each rate of RELAX_GRID given to all
-    joints; joint j takes the rate with the lowest mean over the files where it moves (all
-    files if it moves in none) of RMS(twin − measured)/RMS(measured): a joint's rate acts
-    mostly on its own current, so one replay per file and rate serves all six. The surrogate's
-    steady law cannot see λ: it acts where a joint stands still while held by its position
-    loop, letting go of the friction it stopped with as the real drives do (no1's wrist 3
-    stands at 8–12 s while the base turns: the real current relaxes from 0.2 A to 0 within
-    ~2 s; with λ = 0 the twin holds the 0.2 A of stiction it stopped with). The chosen set is
-    replayed once more and kept only if it scores at least as well as the best single rate.
-    Returns (λ per joint, per-joint twin RMS error over the files at those rates)."""
-    moving = np.array([moving_joints(r) for r in recs])
-    tried = []
-    for lam in RELAX_GRID:
-        try:
-            ratio, err = replay_ratios(recs, out, config, lam)
-        except RuntimeError as e:
-            if not quiet:
-                print(f"relax {lam:g} 1/s: the twin's replay failed ({e}); not taken", flush=True)
-            continue
-        tried.append((lam, ratio, err))
-        if not quiet:
-            print(f"relax {lam:g} 1/s: mean RMS(twin - measured)/RMS(measured) "
-                  f"{ratio[moving].mean():.4f} over the fit files' moving joints; per joint "
-                  + " ".join(f"{joint_score(ratio, moving, j):.4f}" for j in range(NJ)),
-                  flush=True)
-    if not tried:
-        raise RuntimeError("the twin cannot replay the fit files at any --relax rate")
-
-    per_joint = np.array([min(tried, key=lambda t: joint_score(t[1], moving, j))[0]
-                          for j in range(NJ)])
-    single = min(tried, key=lambda t: t[1][moving].mean())
-    err2 = lambda err: np.sqrt(np.mean(err ** 2, axis=0))
-    if len(set(per_joint.tolist())) > 1:
-        try:
-            ratio, err = replay_ratios(recs, out, config, per_joint)
-            if not quiet:
-                print("relax per joint " + " ".join(f"{v:g}" for v in per_joint) +
-                      f" 1/s: mean RMS(twin - measured)/RMS(measured) "
-                      f"{ratio[moving].mean():.4f}", flush=True)
-            if ratio[moving].mean() <= single[1][moving].mean():
-                return per_joint, err2(err)
-        except RuntimeError as e:
-            if not quiet:
-                print(f"relax per joint: the twin's replay failed ({e}); not taken", flush=True)
-    return np.full(NJ, single[0]), err2(single[2])
-
 
 def append_relax(path, lam, per_joint, units, files):
     """Add the chosen non-zero rates to the overlay at path; their residual is the twin's
@@ -555,7 +417,7 @@ def fit_and_write(recs, out, a, argv, params, units, arm, drives):
     name = a.name or Path(out).stem
     keys = write_overlay(out, name, a.config, argv, spec, res, per_joint, units, recs, params)
     if len(RELAX_GRID) > 1 or RELAX_GRID[0] != 0.0:
-        lam, twin_err = choose_relax(recs, out, a.config, a.quiet)
+        lam, twin_err = judge_io.choose_relax(recs, out, a.config, RELAX_GRID, a.quiet)
         keys = list(keys) + append_relax(out, lam, twin_err, units, recs)
         print("bristle relaxation per joint: " + " ".join(f"{v:g}" for v in lam) +
               " 1/s (the twin's replay of the fit files)")
@@ -570,20 +432,6 @@ def fit_and_write(recs, out, a, argv, params, units, arm, drives):
                       if fd.rec.has("target_current") else float("nan"))
                 line += f" {np.sqrt(np.mean(err[:, j] ** 2)):.3f}/{ur:.3f}"
             print(line)
-
-
-def judge(h, overlay, config):
-    """Replay table of holdout h with the paper's parameters and with overlay; True when the
-    twin's RMS current error is at most UR's on every joint that moves."""
-    moving = moving_joints(h)
-    base = replay(h.path, config=config)
-    fitted = replay(h.path, overlay=overlay, config=config)
-    print(replay_table(h.path, base, moving, "paper parameters")[0], flush=True)
-    table, ok = replay_table(h.path, fitted, moving, f"overlay {Path(overlay).name}")
-    print(table, flush=True)
-    print(f"{h.path.name}: twin <= UR on every moving joint with the overlay: "
-          f"{'yes' if ok else 'NO'}", flush=True)
-    return ok
 
 
 def main(argv=None):
@@ -651,7 +499,7 @@ def main(argv=None):
         if not a.leave_one_out:
             fit_and_write(recs, a.out, a, argv, params, units, arm, drives)
             for h in holdouts:
-                judge(h, a.out, a.config)
+                judge_io.judge(h, a.out, a.config)
             return 0
         verdicts = []
         for k, h in enumerate(recs):
@@ -659,7 +507,7 @@ def main(argv=None):
             print(f"== fold {k + 1}/{len(recs)}: fit without {h.path.name}", flush=True)
             fit_and_write(recs[:k] + recs[k + 1:], out, a, argv, params, units, arm, drives)
             try:
-                verdicts.append((h.path.name, judge(h, out, a.config)))
+                verdicts.append((h.path.name, judge_io.judge(h, out, a.config)))
             except RuntimeError as e:
                 # a twin that cannot replay the held-out file fails that fold; the other
                 # folds are still judged, and the exit status says a replay failed
