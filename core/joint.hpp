@@ -4,6 +4,8 @@
 #ifndef URT_CORE_JOINT_HPP
 #define URT_CORE_JOINT_HPP
 
+#include <cmath>
+
 #include "urt/data.h"
 #include "urt/drivers/friction.h"
 #include "urt/model.h"
@@ -60,6 +62,23 @@ inline const urt_friction_params_t& friction_now(const urt_model_t* m, const urt
                                                  int j) noexcept {
   const urt_fault_joint_t* fj = joint_fault(d, j);
   return fj ? fj->friction : m->friction[j];
+}
+
+// LuGre's bristles carry at most g(q̇)/σ0: its own solutions keep |z| within that. When a fault
+// lowers a joint's Coulomb level (a brake drag released, an intermittent window closing, a
+// lubricant fault cleared), bristles loaded beyond the new level slip to it at once instead of
+// being carried over: left beyond it, a stuck joint's z stays there (ż = q̇ − σ0|q̇|z/g is 0 at
+// rest), every step is implausible and the arm stops. Called only where the level fell; below
+// f_c (1 − |asym|), which g never goes under, nothing is evaluated. Context: RT.
+inline void bristles_to_level(const urt_friction_params_t& fp, double* x) noexcept {
+  double& z = x[URT_X_Z];
+  if (!fp.enabled || fp.sigma0 * std::fabs(z) <= fp.f_c * (1.0 - std::fabs(fp.asym))) {
+    return;
+  }
+  const double z_lim = urt_friction_g(&fp, x[URT_X_QD]) / fp.sigma0;
+  if (std::fabs(z) > z_lim) {
+    z = std::copysign(z_lim, z);
+  }
 }
 
 // The joint encoder's reading: its filter's output p plus the held error eps_q, through a
