@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0
- * tests/core/test_faults.c — core/fault_eval.cpp and core/fault_load.cpp: each fault class's
- * signature in the physics against a value derived without the fault code (the catalogue's
- * law, the model's own equations with the parameter edited, or the arm's Jacobian), the
- * profiles and the truth, the scenario file's errors, and no heap use in urt_step. */
+ * tests/core/test_faults.c — core/fault_eval.cpp, fault_scenario.cpp and fault_load.cpp: each
+ * fault class's signature in the physics against a value derived without the fault code (the
+ * catalogue's law, the model's own equations with the parameter edited, or the arm's
+ * Jacobian), the profiles and the truth, adding and clearing faults, the scenario file's
+ * errors, and no heap use in urt_step. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
