@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
 """The twin's judgement of a calibration, for tools/urt_identify.py: replays of recordings
 through urtwin itself (urt_sim --replay … --summary-json), the replay table against UR's own
