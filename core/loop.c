@@ -29,7 +29,6 @@
 #include "urt/thread.h"
 
 #define DRIVE_HISTORY 1024          /* drive samples kept (1 s at 1 kHz)            */
-#define CATCH_UP_LIMIT 50           /* periods behind before the clock is re-anchored */
 #define STACK_PREFAULT (256 * 1024) /* bytes of stack touched before the loop        */
 #define PHYSICS_STACK (1024 * 1024) /* the physics thread's whole stack                */
 
@@ -517,7 +516,7 @@ static void *physics_main(void *arg) {
       if (end > deadline) {
         atomic_fetch_add_explicit(&l->overruns, 1, memory_order_relaxed);
         int64_t behind = (end - deadline) / l->period_ns;
-        if (behind > CATCH_UP_LIMIT) {
+        if (behind > URT_LOOP_CATCH_UP_LIMIT) {
           // too far behind to catch up: count the periods as missed and re-anchor
           atomic_fetch_add_explicit(&l->missed_periods, (uint64_t)behind, memory_order_relaxed);
           anchor += behind * l->period_ns;

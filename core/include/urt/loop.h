@@ -34,6 +34,10 @@ typedef enum urt_pacing {
 #define URT_LOOP_HISTORY 512       /* snapshots kept (about 1 s at 500 Hz) */
 #define URT_LOOP_MAX_PRODUCERS 8   /* command rings */
 #define URT_LOOP_RING_CAPACITY 256 /* commands per ring */
+// a paced loop that falls behind wall time catches up by running late ticks back to back; more
+// than this many periods behind, it counts them as missed periods and re-anchors its clock. With
+// no missed periods the tick count is therefore never more than this many periods off wall time
+#define URT_LOOP_CATCH_UP_LIMIT 50
 
 typedef struct urt_loop_config {
   double period;         /* controller period [s]: 0.002 e-Series, 0.008 CB3 */

@@ -58,6 +58,22 @@ static double now_s(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+// the loop's latest tick and the wall time it was read at, read between two clock readings less
+// than 0.2 ms apart (a preempted read is taken again) so that the pair is one instant
+static uint64_t tick_at(urt_loop_t *loop, double *t) {
+  uint64_t k = 0;
+  for (int tries = 0; tries < 1000; ++tries) {
+    double ta = now_s();
+    k = urt_loop_latest_tick(loop);
+    double tb = now_s();
+    *t = 0.5 * (ta + tb);
+    if (tb - ta < 2e-4) {
+      break;
+    }
+  }
+  return k;
+}
+
 static void sleep_s(double s) {
   struct timespec ts = {(time_t)s, (long)((s - (time_t)s) * 1e9)};
   nanosleep(&ts, NULL);
@@ -213,8 +229,8 @@ static void send_command(lcm_t *lcm, const char *ch, const double q[6], const do
 
 //---- tests ------------------------------------------------------------------------------------
 
-// 2 s of tick pacing: every tick in the window arrives once, in order, at 500 Hz (±1 %) if the
-// loop kept wall time; drive messages at 1 kHz of physics time
+// 2 s of tick pacing: every tick in the window arrives once, in order, at 500 Hz of wall time
+// (within the loop's catch-up bound) if no period was missed; drive messages at 1 kHz of physics time
 static void test_lcm_loop__status_every_tick_at_the_controller_rate(void **state) {
   rig_t r;
   rig_start(&r, 1, URT_PACING_TICK, 1000);
@@ -226,11 +242,10 @@ static void test_lcm_loop__status_every_tick_at_the_controller_rate(void **state
   long drops0 = udp_drops_now();
 
   // the window: ticks made during 2 s of wall time
-  double t0 = now_s();
-  uint64_t k0 = urt_loop_latest_tick(r.loop);
+  double t0, t1;
+  uint64_t k0 = tick_at(r.loop, &t0);
   sleep_s(2.0);
-  uint64_t k1 = urt_loop_latest_tick(r.loop);
-  double t1 = now_s();
+  uint64_t k1 = tick_at(r.loop, &t1);
   sleep_s(0.2);
 
   urt_lcm_stats_t st;
@@ -270,9 +285,16 @@ static void test_lcm_loop__status_every_tick_at_the_controller_rate(void **state
   double drive_tol = 0.01 * 2.0 * ticks + 1;
   assert_true(drive_in_window <= 2.0 * ticks + drive_tol);
   assert_true(2.0 * ticks - drive_in_window <= drive_tol + (double)(dropped - missing));
-  // the controller rate, when this machine let the loop keep wall time
+  // the controller keeps wall time: with no missed periods the loop is never ahead of its clock
+  // and never more than URT_LOOP_CATCH_UP_LIMIT periods behind it, at either end of the window
+  // (late ticks under a slow build are caught up, not lost: a rate of 493.5 Hz was measured here
+  // with 428 overruns, the window ending 13 ticks behind). Without the catch-up the ticks would
+  // fall short by every overrun's lateness
   if (ls.missed_periods == 0) {
-    assert_true(fabs(rate - 500.0) <= 5.0);
+    double expected = wall * 500.0;
+    print_message("ticks %.0f against %.1f of wall time (bound ±%d)\n", ticks, expected,
+                  URT_LOOP_CATCH_UP_LIMIT + 1);
+    assert_true(fabs(ticks - expected) <= URT_LOOP_CATCH_UP_LIMIT + 1);
   } else {
     print_message("loop missed periods on this machine: rate not checked\n");
   }
