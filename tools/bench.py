@@ -38,6 +38,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from urt_replay_judge import replay  # the replay every tool runs (urt_sim --replay)
+
 ROOT = Path(__file__).resolve().parent.parent
 
 def warn(msg):
@@ -470,16 +472,10 @@ def run_replay_bench(build, config, quick):
         return {"status": "skipped", "reason": f"{exe} not built"}
     seconds, runs = (8.0, 1) if quick else (80.0, 3)
 
-    def at_rate(tmp, rec, rate):
+    def at_rate(rec, rate):
         speeds, cpus, walls, summary = [], [], [], None
-        for k in range(runs):
-            out = Path(tmp) / f"summary{rate}_{k}.json"
-            cmd = [str(exe), "--config", config, "--replay", str(rec), "--summary-json",
-                   str(out), "--quiet"] + (["--rate", str(rate)] if rate else [])
-            proc = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=1800)
-            if proc.returncode != 0:
-                raise RuntimeError(proc.stderr.strip())
-            summary = json.loads(out.read_text())
+        for _ in range(runs):
+            summary = replay(rec, config=config, rate=rate, sim=exe, timeout=1800)
             speeds.append(summary["speed"])
             cpus.append(summary["speed_cpu"])
             walls.append(summary["wall"])
@@ -494,8 +490,8 @@ def run_replay_bench(build, config, quick):
         rec = Path(tmp) / "long.csv"
         source = long_recording(rec, seconds)
         try:
-            res, err = at_rate(tmp, rec, None)
-            res10, err10 = at_rate(tmp, rec, 10000)
+            res, err = at_rate(rec, None)
+            res10, err10 = at_rate(rec, 10000)
         except (OSError, subprocess.SubprocessError, ValueError, RuntimeError) as e:
             return {"status": "failed", "reason": str(e)}
     res.update({"status": "ok", "recording": source, "duration_s": seconds, "target": 10.0})

@@ -7,37 +7,38 @@
                   [--hold-settle S] [--rest-model W] [--relax L...] [--leave-one-out]
 
 Fits, by physically bounded least squares (scipy.optimize.least_squares, trust-region
-reflective), the measured motor currents `actual_current_j` against the current a fast
-surrogate of the twin predicts at the recorded set-point (tools/urt_surrogate.py: rigid-body
-torque + reflected motor and gear inertia + the LuGre law in steady sliding, divided by
-k_t·r): per joint that moves (range > 0.05 rad in a file) the Coulomb level f_c, the viscous
-level f_v, the Stribeck level k_static and speed qd_s, the direction asymmetry asym; for every
-joint the current-measurement offset; and the CoMs of links 2–6 (the first moments that set
-the gravity torques of shoulder, elbow and wrists; masses are kept, a CoM is a mass-weighted
-position), and per joint that moves the motor torque constant k_t (within ±10 % of the
-config's: the motors' tolerance and temperature; the model's ke is kt),
-each within physical bounds and pulled weakly towards the paper's value so that what the
-recordings cannot see stays the paper's. A Stribeck dip steeper than the gear's output
-damping (the paper's own dip where that is steeper) is penalised: it would self-excite. A payload (payload.mass, payload.cog) is
-fitted when the model has those keys (urt_config prints a `payload` block).
+reflective), the measured motor currents `actual_current_j` against the current a fast surrogate
+of the twin predicts at the recorded set-point (tools/urt_surrogate.py: rigid-body torque +
+reflected motor and gear inertia + the LuGre law in steady sliding, divided by k_t·r): per joint
+that moves (range > 0.05 rad in a file) the Coulomb level f_c, the viscous level f_v, the
+Stribeck level k_static and speed qd_s, the direction asymmetry asym; for every joint the
+current-measurement offset; and the CoMs of links 2–6 (the first moments that set the gravity
+torques of shoulder, elbow and wrists; masses are kept, a CoM is a mass-weighted position), and
+per joint that moves the motor torque constant k_t (within ±10 % of the config's: the motors'
+tolerance and temperature; the model's ke is kt), each within physical bounds and pulled weakly
+towards the paper's value so that what the recordings cannot see stays the paper's. A Stribeck
+dip steeper than the gear's output damping (the paper's own dip where that is steeper) is
+penalised: it would self-excite. A payload (payload.mass, payload.cog) is fitted when the model
+has those keys (urt_config prints a `payload` block).
 
 It prints one progress line per iteration, then writes the overlay: only the keys it changed,
 each with value, unit (as urt_config/--print-model prints it), the files it came from and the
 fit's RMS current residual [A] on the joint(s) the key acts on (surrogate, fit files).
 
---holdout FILE... replays each file through the twin itself (tools/urt_replay_judge.py:
-urt_sim --replay FILE --overlay OUT --summary-json), with the paper's parameters and with the overlay, and prints the table:
-per joint RMS(measured), RMS(twin − measured), RMS(UR target_current − measured), their ratios,
-and whether the joint moves. --leave-one-out fits on all FILES but one and judges that one, for
-each (a fold whose replay fails is reported and counted as failed). --hold-settle S also fits a
-moving joint's holds from S seconds after its set-point stopped (default 0: not at all;
-config/overlays/README.md). --rest-model W (default 10) fits the current the twin reports (holding torque and
-measurement offset), where the whole
-arm rests, to the recording's target_current (the controller's gravity model there) with weight
-W, not to the measured current, which carries the friction the drive was left holding. --relax
-L... (default 0 100 300 1000 [1/s]) chooses each joint's bristle relaxation rate from those by
-the twin's replay of the fit files with the overlay (0 alone: no replays, no relax keys). Exit status: 0 done, 1 run-time failure (twin replay), 2 usage or
-input error (a bad recording reads file:line: reason).
+--holdout FILE... replays each file through the twin itself (tools/urt_replay_judge.py: urt_sim
+--replay FILE --overlay OUT --summary-json), with the paper's parameters and with the overlay,
+and prints the table: per joint RMS(measured), RMS(twin − measured), RMS(UR target_current −
+measured), their ratios, and whether the joint moves. --leave-one-out fits on all FILES but one
+and judges that one, for each (a fold whose replay fails is reported and counted as failed).
+--hold-settle S also fits a moving joint's holds from S seconds after its set-point stopped
+(default 0: not at all; config/overlays/README.md). --rest-model W (default 10) fits the current
+the twin reports (holding torque and measurement offset), where the whole arm rests, to the
+recording's target_current (the controller's gravity model there) with weight W, not to the
+measured current, which carries the friction the drive was left holding. --relax L... (default 0
+100 300 1000 [1/s]) chooses each joint's bristle relaxation rate from those by the twin's replay
+of the fit files with the overlay (0 alone: no replays, no relax keys). Exit status: 0 done, 1
+run-time failure (twin replay), 2 usage or input error (a bad recording reads file:line:
+reason).
 """
 
 import argparse

@@ -37,20 +37,23 @@ def moving_joints(rec):
     return (rec["target_q"].max(axis=0) - rec["target_q"].min(axis=0)) > MOVE_RANGE
 
 
-def replay(path, overlay=None, config=None, sets=()):
+def replay(path, overlay=None, config=None, sets=(), rate=None, sim=None, timeout=None):
     """The twin's replay summary of one recording (urt_sim --replay … --summary-json), with
-    --set KEY=VALUE for each of sets."""
-    sim = tool("urt_sim")
+    --set KEY=VALUE for each of sets, at the config's rate or `rate` [Hz]; sim: the urt_sim to
+    run (default the built one), timeout [s] (subprocess.TimeoutExpired past it)."""
+    sim = sim or tool("urt_sim")
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "summary.json"
-        args = [sim, "--quiet", "--replay", str(path), "--summary-json", str(out)]
+        args = [str(sim), "--quiet", "--replay", str(path), "--summary-json", str(out)]
         if config:
             args += ["--config", str(config)]
         if overlay:
             args += ["--overlay", str(overlay)]
         for kv in sets:
             args += ["--set", kv]
-        r = subprocess.run(args, capture_output=True, text=True, cwd=ROOT)
+        if rate:
+            args += ["--rate", str(rate)]
+        r = subprocess.run(args, capture_output=True, text=True, cwd=ROOT, timeout=timeout)
         if r.returncode != 0:
             raise RuntimeError(f"urt_sim --replay {path} failed ({r.returncode}): "
                                f"{r.stderr.strip()[-500:]}")
