@@ -119,7 +119,7 @@ def expected():
 
 
 def movej_script(q):
-    return f"movej([{', '.join(repr(x) for x in q)}], a=1.4, v=1.05)\n"
+    return f"movej([{', '.join(repr(x) for x in q)}], a=4.0, v=3.0)\n"
 
 
 def check(path, rows, expected):
