@@ -230,7 +230,8 @@ static void send_command(lcm_t *lcm, const char *ch, const double q[6], const do
 //---- tests ------------------------------------------------------------------------------------
 
 // 2 s of tick pacing: every tick in the window arrives once, in order, at 500 Hz of wall time
-// (within the loop's catch-up bound) if no period was missed; drive messages at 1 kHz of physics time
+// (within the loop's catch-up bound) if no period was missed; drive messages at 1 kHz of
+// physics time
 static void test_lcm_loop__status_every_tick_at_the_controller_rate(void **state) {
   rig_t r;
   rig_start(&r, 1, URT_PACING_TICK, 1000);
