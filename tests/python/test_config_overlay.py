@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """Overlays (--overlay FILE, urt_model_load_overlays) and `include:` in a config file
-(core/model_load.cpp), through urt_config, urt_sim and urtwin: values land in the model, in
+(core/config_tree.cpp), through urt_config, urt_sim and urtwin: values land in the model, in
 order, before --set; every refusal reads "file:line: key: reason" with exit 2; and the unit table
 (core/model_units.cpp) covers every key of config/ur5.yaml with the unit urt_config prints."""
 
