@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // core/config_tree.cpp — reads a robot parameter file into a YAML tree (config_tree.hpp):
 // includes, overlays and "dotted.key=value" overrides, each value's origin recorded. Moved
-// unchanged out of model_load.cpp, which validates the tree and fills the model.
+// unchanged out of model_load.cpp, which validates the tree and fills the model. Tested through
+// urt_model_load: tests/core/test_model_load.c (overrides), tests/python/test_config_overlay.py
+// (overlays, includes, units).
 //
 // Context: non-RT. C++ exceptions are used internally and all of them stop at urt_model_load.
 
