@@ -4,7 +4,8 @@
 // speedl, stopj, stopl, direct, servol, servoc, direct torque, freedrive, force mode, pause)
 // and when its id is done, the speed slider and pause, the command checks and protective stops,
 // and the set-point interpolation the physics steps follow. The rest of the motion layer sits
-// beside it, one job a file: the motions (motion.hpp, motion_*.cpp), kinematics and IK
+// beside it, one job a file: the commands that are not motions (outputs, modes, payload, force
+// mode, …: controller_commands.cpp), the motions (motion.hpp, motion_*.cpp), kinematics and IK
 // (controller_kinematics.cpp), the model feed-forward (controller_feedforward.cpp) and the motor
 // thermal model (controller_thermal.cpp); controller_internal.hpp is what they share.
 // Everything runs on the physics thread: fixed-size Eigen on the stack, no allocation, no
@@ -70,11 +71,8 @@ namespace urt::core {
 
 namespace {
 
-constexpr double kSliderRate = 2.0;     // speed_scaling slew rate [1/s]
-constexpr double kPauseRate = 4.0;      // pause_scale slew rate [1/s]: 0.25 s from full speed to rest
-constexpr double kWrenchMaxF = 1000.0;  // SET_WRENCH / FORCE_MODE force bound per axis [N]
-constexpr double kWrenchMaxT = 200.0;   // and torque bound [N m]
-constexpr double kGravityMax = 100.0;   // SET_GRAVITY bound per axis (the loader's) [m/s²]
+constexpr double kSliderRate = 2.0;  // speed_scaling slew rate [1/s]
+constexpr double kPauseRate = 4.0;   // pause_scale slew rate [1/s]: 0.25 s from full speed to rest
 
 }  // namespace
 
@@ -142,7 +140,7 @@ uint32_t torque_faults(const urt_model_t* m, const double* tau) noexcept {
   return 0;
 }
 
-namespace {
+// ---- the state machine's moves (the settings' commands use them too) ----
 
 bool running(const urt_ctrl_t* c) noexcept {
   return c->robot_mode == URT_ROBOT_MODE_RUNNING && c->safety_mode == URT_SAFETY_MODE_NORMAL;
@@ -184,6 +182,8 @@ void protective_stop(urt_ctrl_t* c, urt_data_t* d, uint32_t fault, uint32_t psto
   std::memset(c->tau_model0, 0, sizeof c->tau_model0);
   std::memset(c->tau_model1, 0, sizeof c->tau_model1);
 }
+
+namespace {
 
 void refuse(urt_ctrl_t* c, const urt_ctrl_cmd_t* cmd, uint32_t fault) noexcept {
   c->fault |= fault;
@@ -325,250 +325,13 @@ int urt_ctrl_init(const urt_model_t* m, urt_ctrl_t* c, const urt_data_t* d, doub
 
 void urt_ctrl_apply(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d,
                     const urt_ctrl_cmd_t* cmd) {
-  const int kind = cmd->kind;
   const MotionEnv e{m, c, d, 0.0, 0.0};
   if (const Motion* type = motion_for_command(*cmd)) {
     apply_motion(e, *type, cmd);
     return;
   }
-
-  switch (kind) {
-    case URT_CTRL_SET_DIGITAL_OUT:
-      if (cmd->index < 0 || cmd->index > 17) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else if (cmd->value != 0.0) {
-        c->digital_out |= 1u << cmd->index;
-      } else {
-        c->digital_out &= ~(1u << cmd->index);
-      }
-      break;
-    case URT_CTRL_SET_ANALOG_OUT:
-      if (cmd->index < 0 || cmd->index > 1 || !(cmd->value >= 0.0 && cmd->value <= 1.0)) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else {
-        c->analog_out[cmd->index] = cmd->value;
-      }
-      break;
-    case URT_CTRL_SET_SPEED_SLIDER:
-      if (!(cmd->value >= 0.0 && cmd->value <= 1.0)) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else {
-        c->speed_slider = cmd->value;
-      }
-      break;
-    case URT_CTRL_SET_TCP:
-      if (!all_finite(cmd->pose, 6)) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else {
-        std::memcpy(c->tcp_offset, cmd->pose, sizeof c->tcp_offset);
-      }
-      break;
-    case URT_CTRL_SET_PAYLOAD: {
-      // mounted from this tick boundary on: the physics' next step and this tick's feed-forward
-      // (tau_model1; tau_model0 still carries the old payload, so the feed-forward moves over
-      // one period, as a real controller's does within its cycle)
-      urt_payload_t p = {};
-      p.mass = cmd->value;
-      std::memcpy(p.cog, cmd->pose, sizeof p.cog);
-      std::memcpy(p.inertia, cmd->tau, sizeof p.inertia);
-      if (urt_data_set_payload_target(m, d, &p, cmd->t) != URT_OK) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else {
-        c->payload_mass = p.mass;
-        std::memcpy(c->payload_cog, p.cog, sizeof c->payload_cog);
-      }
-      break;
-    }
-    case URT_CTRL_POWER_ON:
-      // a faulted joint keeps the arm off until the safety system is restarted
-      if (c->safety_mode == URT_SAFETY_MODE_FAULT) {
-        c->fault |= URT_CTRL_FAULT_NOT_RUNNING;
-      } else if (c->robot_mode == URT_ROBOT_MODE_POWER_OFF) {
-        c->robot_mode = URT_ROBOT_MODE_IDLE;
-      }
-      break;
-    case URT_CTRL_POWER_OFF:
-      power_off(c, d);
-      break;
-    case URT_CTRL_BRAKE_RELEASE:
-      if (c->safety_mode == URT_SAFETY_MODE_FAULT) {
-        c->fault |= URT_CTRL_FAULT_NOT_RUNNING;
-      } else if (c->robot_mode == URT_ROBOT_MODE_IDLE ||
-                 c->robot_mode == URT_ROBOT_MODE_POWER_OFF) {
-        c->robot_mode = URT_ROBOT_MODE_RUNNING;  // the set-point keeps holding where it was
-      }
-      break;
-    case URT_CTRL_UNLOCK_PSTOP:
-      if (c->safety_mode == URT_SAFETY_MODE_PROTECTIVE_STOP || d->pstop) {
-        urt_pstop_reset(m, d);
-        c->safety_mode = URT_SAFETY_MODE_NORMAL;
-        c->enc_joint = -1;
-        hold_at(c, measured_q(d));
-        model_torque(m, c, d->live.payload, c->q1, c->qd1, c->qdd1, c->tau_model1);
-        std::memcpy(c->tau_model0, c->tau_model1, sizeof c->tau_model0);
-      }
-      break;
-    case URT_CTRL_RESTART_SAFETY:
-      // the way out of a joint fault: NORMAL, still powered off (power on, brake release next)
-      if (c->safety_mode == URT_SAFETY_MODE_FAULT) {
-        power_off(c, d);
-        c->safety_mode = URT_SAFETY_MODE_NORMAL;
-        c->fault_joint = -1;
-      }
-      break;
-    case URT_CTRL_PROGRAM_STATE:
-      c->program_state = cmd->index;
-      if (cmd->index == URT_PROGRAM_STOPPED && c->paused) {
-        // the program ended while paused: the held motion is over
-        c->paused = 0;
-        if (c->motion != URT_MOTION_IDLE || c->has_pending) {
-          stop_to_rest(e, StopCause::kHalt);
-        }
-      }
-      break;
-    case URT_CTRL_PAUSE:
-      if (!c->paused) {
-        c->paused = 1;
-        motion_of(c->motion).stop(e, StopCause::kPause);
-      }
-      break;
-    case URT_CTRL_RESUME:
-      c->paused = 0;
-      break;
-    case URT_CTRL_SET_WRENCH: {
-      bool ok = all_finite(cmd->pose, 6);
-      for (int i = 0; i < 6 && ok; i++) {
-        ok = std::fabs(cmd->pose[i]) <= (i < 3 ? kWrenchMaxF : kWrenchMaxT);
-      }
-      if (!ok) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else {
-        std::memcpy(d->wrench_ext, cmd->pose, sizeof d->wrench_ext);
-      }
-      break;
-    }
-    case URT_CTRL_SET_INPUTS: {
-      // the levels the outside world puts on the inputs: a mask outside the 18 pins, bits
-      // outside the mask, or an analog value a UR input cannot read (0–10 V) is refused whole
-      const double amask = cmd->a, bits = cmd->value;
-      bool ok = cmd->index >= 0 && cmd->index < (1 << 18) && amask >= 0.0 && amask < 16.0 &&
-                amask == std::floor(amask) && bits >= 0.0 && bits < (1 << 18) &&
-                bits == std::floor(bits) && (static_cast<uint32_t>(bits) & ~cmd->index) == 0;
-      const uint32_t am = ok ? static_cast<uint32_t>(amask) : 0;
-      for (int k = 0; k < 4 && ok; k++) {
-        ok = !(am & (1u << k)) || (cmd->q[k] >= 0.0 && cmd->q[k] <= 10.0);
-      }
-      if (!ok) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-        break;
-      }
-      const uint32_t mask = static_cast<uint32_t>(cmd->index);
-      c->digital_in = (c->digital_in & ~mask) | static_cast<uint32_t>(bits);
-      for (int k = 0; k < 4; k++) {
-        if (am & (1u << k)) {
-          (k < 2 ? c->analog_in[k] : c->tool_analog_in[k - 2]) = cmd->q[k];
-        }
-      }
-      break;
-    }
-    case URT_CTRL_FAULT: {
-      // live injection: a fault into the physics from this tick on (its onset no earlier than
-      // now), or the faults matching a target cleared; refused whole when invalid or full
-      urt_fault_spec_t f;
-      const int what = urt_fault_cmd_unpack(cmd, &f);
-      int rc = what < 0 ? what : URT_OK;
-      if (what == 1) {
-        f.onset = std::fmax(f.onset, d->t);
-        rc = urt_data_add_fault(m, d, &f);
-      } else if (what == 0) {
-        urt_data_clear_faults(m, d, f.cls, f.joint, f.component);
-      }
-      if (rc != URT_OK) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-        c->faults_refused++;
-      } else {
-        c->faults_applied++;
-      }
-      break;
-    }
-    case URT_CTRL_ZERO_FTSENSOR:
-      if (!all_finite(cmd->pose, 6)) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else {
-        std::memcpy(c->ft_bias, cmd->pose, sizeof c->ft_bias);
-      }
-      break;
-    case URT_CTRL_SET_TOOL_VOLTAGE:
-      // set_tool_voltage: the three supplies a UR tool connector has
-      if (cmd->value != 0.0 && cmd->value != 12.0 && cmd->value != 24.0) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else {
-        c->tool_voltage = static_cast<int32_t>(cmd->value);
-      }
-      break;
-    case URT_CTRL_SET_GRAVITY: {
-      bool ok = all_finite(cmd->pose, 3);
-      for (int i = 0; i < 3 && ok; i++) {
-        ok = std::fabs(cmd->pose[i]) <= kGravityMax;
-      }
-      if (!ok) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else {
-        std::memcpy(c->gravity, cmd->pose, sizeof c->gravity);
-      }
-      break;
-    }
-    case URT_CTRL_FREEDRIVE:  // index 0 (index 1 is a motion): end, decelerate, hold
-      if (c->motion == URT_MOTION_FREEDRIVE) {
-        stop_to_rest(e, StopCause::kHalt);
-      }
-      break;
-    case URT_CTRL_FORCE_MODE: {
-      bool ok = all_finite(cmd->pose, 6) && all_finite(cmd->q, 6) && all_finite(cmd->tau, 6) &&
-                all_finite(cmd->qd, 6) && cmd->index >= 1 && cmd->index <= 3;
-      for (int i = 0; i < 6 && ok; i++) {
-        ok = (cmd->q[i] == 0.0 || cmd->q[i] == 1.0) && cmd->qd[i] >= 0.0 &&
-             std::fabs(cmd->tau[i]) <= (i < 3 ? kWrenchMaxF : kWrenchMaxT);
-      }
-      if (!running(c) || d->pstop) {
-        c->fault |= URT_CTRL_FAULT_NOT_RUNNING;
-      } else if (!ok) {
-        c->fault |= URT_CTRL_FAULT_BAD_ARGUMENT;
-      } else {
-        c->force = *cmd;
-        if (!c->force_mode || c->motion != URT_MOTION_FORCE) {
-          force_begin(e);
-        }
-      }
-      break;
-    }
-    case URT_CTRL_FORCE_MODE_END:
-      if (c->force_mode || c->motion == URT_MOTION_FORCE) {
-        bool was_force = c->motion == URT_MOTION_FORCE;
-        c->force_mode = 0;
-        if (was_force) {
-          finish_motion(c);
-          start_stop(c, tcp_twist_decel_time(m, c, kForceAcc, kForceAccRot));
-        }
-      }
-      break;
-    case URT_CTRL_PROTECTIVE_STOP:
-      // as the physics' own stop, from where the set-point is; only a running arm can stop
-      if (c->robot_mode == URT_ROBOT_MODE_RUNNING &&
-          c->safety_mode != URT_SAFETY_MODE_PROTECTIVE_STOP) {
-        protective_stop(c, d, URT_CTRL_FAULT_SCRIPT_PSTOP, 0);
-      }
-      break;
-    case URT_CTRL_HALT:
-      if (c->motion != URT_MOTION_IDLE || moving(c)) {
-        motion_of(c->motion).stop(e, StopCause::kHalt);
-      }
-      break;
-    default:
-      break;
-  }
+  apply_setting(e, cmd);  // everything else: I/O, modes, payload, … (controller_commands.cpp)
 }
-
 
 void urt_ctrl_tick(const urt_model_t* m, urt_ctrl_t* c, urt_data_t* d) {
   c->tick++;

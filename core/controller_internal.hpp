@@ -35,6 +35,31 @@ void mark_done(urt_ctrl_t* c, uint64_t id) noexcept;
 // position control, out of force mode, no external feed-forward.
 void finish_motion(urt_ctrl_t* c) noexcept;
 
+// ---- the state machine's moves (controller.cpp) ----
+
+// RUNNING with safety NORMAL: the arm takes motions.
+bool running(const urt_ctrl_t* c) noexcept;
+
+// Hold the set-point at q, at rest (both ends of the current period).
+void hold_at(urt_ctrl_t* c, const Vec6& q) noexcept;
+
+// The arm powered off: the motion ends and the set-point holds where the arm is.
+void power_off(urt_ctrl_t* c, const urt_data_t* d) noexcept;
+
+// A protective stop: fault bits into c->fault, a running program paused (but for a bad target),
+// the motion ended, pstop_bits (if any) into the physics' stop, the set-point held where the
+// physics' command is.
+void protective_stop(urt_ctrl_t* c, urt_data_t* d, uint32_t fault, uint32_t pstop_bits) noexcept;
+
+// ---- the commands that are not motions (controller_commands.cpp) ----
+
+struct MotionEnv;  // motion.hpp
+
+// Apply one command that motion_for_command() does not take: outputs, slider, TCP, payload,
+// power, brakes, unlock, safety restart, program state, pause/resume, wrench, inputs, faults,
+// F/T zero, tool voltage, gravity, freedrive end, force mode, protective stop, HALT.
+void apply_setting(const MotionEnv& e, const urt_ctrl_cmd_t* cmd) noexcept;
+
 // ---- shared by the motions (core/motion_*.cpp, interface in motion.hpp) ----
 
 // Torque-controlled joints (mask): the set-point follows the arm, so that the command checks,

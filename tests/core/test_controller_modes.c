@@ -1,8 +1,9 @@
 /* SPDX-License-Identifier: Apache-2.0
- * tests/core/test_controller_modes.c — core/controller.cpp, the kinds added for ur_rtde's
- * control script: pause/resume, external wrench and gravity, direct torque, freedrive, servol,
- * servoc and force mode. Each test runs the loop the way the hard loop does (apply, tick, then
- * n_sub × setpoint, command_set, step), sensor noise on as configured. */
+ * tests/core/test_controller_modes.c — core/controller.cpp and controller_commands.cpp, the
+ * kinds added for ur_rtde's control script: pause/resume, external wrench and gravity, direct
+ * torque, freedrive, servol, servoc and force mode. Each test runs the loop the way the hard
+ * loop does (apply, tick, then n_sub × setpoint, command_set, step), sensor noise on as
+ * configured. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
