@@ -27,6 +27,7 @@
 #define SUBMIT_RETRY_TICKS 100
 #define CLOSE_WAIT_MS 250      /* [ms] at most, at a program's end, for the peers to close their ends */
 #define FIRST_TICK_TRIES 100   /* waits of wait_timeout_ms for the controller's first tick before a program starts */
+#define FINISH_STALL_MS 1000   /* [ms] without a tick before a program's last move is no longer waited for */
 
 typedef struct unit {
   char *text;
@@ -166,14 +167,23 @@ static int poll_main(void *ctx) {
 /* a program that ended normally with a move whose blend radius let it go on (its id done, the
  * arm still on the way, core/motion_path.cpp) ends when that move has stopped at its target, as
  * the last motion of a sequence does on a controller; a stop request or a controller that no
- * longer ticks ends the wait */
+ * longer ticks (none for FINISH_STALL_MS) ends the wait. One wait_tick timeout is not that: a
+ * busy host held urtwin's physics thread off for 27 ms in a fresh clone's test run, the wait
+ * (20 ms) ended, and the program's HALT stopped its last movel 27 mm short of its target */
 static void finish_path(urt_runner_t *r) {
   urt_snapshot_t s;
   r->host.snapshot(r->host.ctx, &s);
+  uint64_t stalled_from = 0;  // when the ticks stopped coming (0: they come)
   while (s.motion == URT_MOTION_PATH && !poll_main(r)) {
     uint64_t tick = s.tick;
     if (r->host.wait_tick(r->host.ctx, tick, r->cfg.wait_timeout_ms) == tick) {
-      break;
+      if (!stalled_from) {
+        stalled_from = mono_ns();
+      } else if (since_ns(stalled_from) >= (uint64_t)FINISH_STALL_MS * 1000000u) {
+        break;
+      }
+    } else {
+      stalled_from = 0;
     }
     r->host.snapshot(r->host.ctx, &s);
   }

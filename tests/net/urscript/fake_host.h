@@ -34,8 +34,12 @@ typedef struct fake_host {
   uint64_t vm_tick;         /* the tick the runner asked to process: last after_tick + 1  */
   uint64_t running_from;    /* nonzero: robot mode RUNNING from this tick on (a boot)     */
   bool ramp;                /* q_target[0] = 0.001·tick and tcp_force[2] = −tick each tick */
+  uint64_t path_until;      /* nonzero: s.motion is URT_MOTION_PATH until this tick, then idle */
+  uint64_t stall_at;        /* nonzero: from this tick, wait_tick times out (no tick) ...    */
+  int stall_waits;          /* ... this many times, each after timeout_ms (a host stall)      */
   urt_ctrl_cmd_t cmd[FAKE_MAX];
   uint64_t cmd_vm_tick[FAKE_MAX];  /* vm_tick when each command arrived                */
+  uint64_t cmd_tick[FAKE_MAX];     /* the controller's tick when each command arrived */
   int n_cmd;
   urt_script_msg_t msg[FAKE_MAX];
   int n_msg;
@@ -57,6 +61,7 @@ static inline bool fake_submit(void *ctx, const urt_ctrl_cmd_t *c) {
   }
   if (f->n_cmd < FAKE_MAX) {
     f->cmd_vm_tick[f->n_cmd] = f->vm_tick;
+    f->cmd_tick[f->n_cmd] = f->s.tick;
     f->cmd[f->n_cmd++] = *c;
   }
   if (is_motion(c->kind)) {
@@ -96,6 +101,13 @@ static inline uint64_t fake_wait_tick(void *ctx, uint64_t after, int timeout_ms)
   fake_host *f = ctx;
   if (f->tick_sleep_us > 0) usleep((useconds_t)f->tick_sleep_us);
   pthread_mutex_lock(&f->mu);
+  if (f->stall_at && f->s.tick >= f->stall_at && f->stall_waits > 0) {
+    f->stall_waits--;
+    uint64_t t = f->s.tick;
+    pthread_mutex_unlock(&f->mu);
+    usleep((useconds_t)timeout_ms * 1000);
+    return t;
+  }
   f->vm_tick = after + 1;
   uint64_t n = 1;
   if (f->jump_seed) {
@@ -124,6 +136,9 @@ static inline uint64_t fake_wait_tick(void *ctx, uint64_t after, int timeout_ms)
     if (f->ramp) {  // readings that differ every tick
       f->s.q_target[0] = 0.001 * (double)f->s.tick;
       f->s.tcp_force[2] = -(double)f->s.tick;
+    }
+    if (f->path_until) {
+      f->s.motion = f->s.tick < f->path_until ? URT_MOTION_PATH : URT_MOTION_IDLE;
     }
     if (f->pending_id && f->s.tick >= f->motion_end) {
       f->s.motion_done_id = f->pending_id;

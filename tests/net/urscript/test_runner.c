@@ -71,6 +71,43 @@ static void test_runner__program_reports_started_text_stopped(void **state) {
   assert_int_equal(F.s.program_state, URT_PROGRAM_STOPPED);
 }
 
+static void test_runner__last_blended_move_is_waited_for_through_a_host_stall(void **state) {
+  // the program's last move is still on its path when the program ends (a blend radius let it
+  // go on), and the controller then does not tick for 30 timeouts (a busy host): the program's
+  // HALT waits for the path's end all the same. A single timeout used to end the wait, and the
+  // HALT stopped a movel 27 mm short (test_urscript_motions.py, in a fresh clone)
+  pthread_mutex_lock(&F.mu);
+  const uint64_t t0 = F.s.tick;
+  F.s.motion = URT_MOTION_PATH;
+  F.path_until = t0 + 60;
+  F.stall_at = t0 + 40;
+  F.stall_waits = 30;
+  pthread_mutex_unlock(&F.mu);
+  submit("def p():\n  textmsg(\"end\")\nend");
+  wait_idle();
+  int h = fake_find_cmd(&F, URT_CTRL_HALT, 0);
+  assert_true(h >= 0);
+  assert_int_equal(F.stall_waits, 0);  // the stall happened while the program waited
+  assert_true(F.cmd_tick[h] >= t0 + 60);
+}
+
+static void test_runner__a_controller_that_stops_ticking_ends_the_wait_for_the_path(
+    void **state) {
+  // no tick at all after the program's end: the wait gives up after FINISH_STALL_MS (1 s)
+  pthread_mutex_lock(&F.mu);
+  F.s.motion = URT_MOTION_PATH;
+  F.path_until = F.s.tick + 1000000;
+  F.stall_at = F.s.tick + 20;
+  F.stall_waits = 1 << 30;
+  pthread_mutex_unlock(&F.mu);
+  submit("def p():\n  textmsg(\"end\")\nend");
+  wait_idle();
+  int h = fake_find_cmd(&F, URT_CTRL_HALT, 0);
+  assert_true(h >= 0);
+  assert_int_equal(F.s.motion, URT_MOTION_PATH);
+  assert_int_equal(urt_runner_state(R), URT_PROGRAM_STOPPED);
+}
+
 static void test_runner__program_before_the_first_tick_waits_for_it(void **state) {
   // urtwin's ports open before the physics publishes its first tick, whose snapshot is all
   // zeros: a program that came then had its first move refused ("robot is not running")
@@ -229,6 +266,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_runner__program_reports_started_text_stopped, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__program_before_the_first_tick_waits_for_it, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_runner__last_blended_move_is_waited_for_through_a_host_stall, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_runner__a_controller_that_stops_ticking_ends_the_wait_for_the_path, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__unknown_function_is_reported_and_nothing_runs, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__runtime_error_is_reported_then_stopped, setup, teardown),
       cmocka_unit_test_setup_teardown(test_runner__new_program_stops_the_running_one, setup, teardown),
